@@ -1,0 +1,11 @@
+#pragma once
+// One function per `weft` subcommand, each in its own apps/<name>.cpp: it declares the
+// subcommand's options on `app` and its callback runs the library code.
+#include <CLI/CLI.hpp>
+
+namespace weft::apps {
+
+void add_ops_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
+
+}  // namespace weft::apps

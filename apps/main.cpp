@@ -1,0 +1,36 @@
+// The `weft` command line: one subcommand per file in apps/.
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
+#include "apps/commands.h"
+#include "graph/error.h"
+#include "graph/threads.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "weft: physics-aware monocular human performance capture on the CPU.\n"
+      "Run `weft <command> --help` for a command's options."};
+  app.require_subcommand(1);
+  int threads = 0;
+  app.add_option("--threads", threads, "Thread budget for OpenMP and TBB (0: all cores; "
+                                       "also WEFT_NUM_THREADS)");
+  app.set_version_flag("--version", "weft 0.1.0");
+  app.parse_complete_callback([&] {
+    if (threads > 0) weft::set_num_threads(threads);
+  });
+  weft::apps::add_ops_command(app);
+  weft::apps::add_demo_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const weft::Error& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    spdlog::error("unexpected error: {}", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,25 @@
+# All dependencies are Debian packages; scripts/setup.sh installs them.
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(OpenMP REQUIRED)
+find_package(TBB REQUIRED)
+find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs calib3d)
+find_package(yaml-cpp REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(spdlog REQUIRED)
+
+# Debian's SuiteSparse ships no CMake config: find CHOLMOD by hand.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
+find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig REQUIRED)
+add_library(weft_cholmod INTERFACE)
+target_include_directories(weft_cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
+target_link_libraries(weft_cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSE_CONFIG_LIBRARY})
+
+if(WEFT_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+  include(GoogleTest)
+endif()
+if(WEFT_BUILD_BENCH)
+  find_package(benchmark REQUIRED)
+endif()

@@ -1,0 +1,47 @@
+# weft_layer(NAME DEPS...): a shared library from every .cpp in the current folder.
+# Shared, so that ops registered by static initialisers (WEFT_REGISTER_OP) are always
+# loaded, whatever the executable happens to reference.
+function(weft_layer name)
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
+  if(sources)
+    add_library(${name} SHARED ${sources})
+    target_link_libraries(${name} PUBLIC weft_options ${ARGN})
+  else()  # a layer with no sources yet
+    add_library(${name} INTERFACE)
+    target_link_libraries(${name} INTERFACE weft_options ${ARGN})
+  endif()
+endfunction()
+
+# weft_test_folder(LAYER LIBS...): test executables from tests/LAYER/*.cpp, one per
+# label. Files ending in _gradcheck_test.cpp are labelled gradcheck,
+# _integration_test.cpp integration, any other *_test.cpp unit.
+function(weft_test_folder layer)
+  set(dir ${CMAKE_CURRENT_SOURCE_DIR}/${layer})
+  file(GLOB all CONFIGURE_DEPENDS ${dir}/*_test.cpp)
+  file(GLOB helpers CONFIGURE_DEPENDS ${dir}/*.cpp)
+  list(FILTER helpers EXCLUDE REGEX "_test\\.cpp$")
+  foreach(label unit gradcheck integration)
+    set(files "")
+    foreach(f ${all})
+      if(f MATCHES "_gradcheck_test\\.cpp$")
+        set(l gradcheck)
+      elseif(f MATCHES "_integration_test\\.cpp$")
+        set(l integration)
+      else()
+        set(l unit)
+      endif()
+      if(l STREQUAL label)
+        list(APPEND files ${f})
+      endif()
+    endforeach()
+    if(files)
+      set(target test_${layer}_${label})
+      add_executable(${target} ${files} ${helpers})
+      target_link_libraries(${target} PRIVATE ${ARGN} GTest::gtest GTest::gtest_main GTest::gmock)
+      target_compile_definitions(${target} PRIVATE
+        WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+      gtest_discover_tests(${target} TEST_PREFIX "${layer}." DISCOVERY_MODE PRE_TEST
+        DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${label})
+    endif()
+  endforeach()
+endfunction()

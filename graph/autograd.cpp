@@ -1,0 +1,133 @@
+#include "graph/autograd.h"
+
+#include <unordered_map>
+#include <unordered_set>
+
+#include "graph/op_registry.h"
+
+namespace weft {
+
+namespace {
+thread_local bool t_grad_enabled = true;
+}
+
+bool grad_enabled() { return t_grad_enabled; }
+NoGradGuard::NoGradGuard() : previous_(t_grad_enabled) { t_grad_enabled = false; }
+NoGradGuard::~NoGradGuard() { t_grad_enabled = previous_; }
+
+const char* node_op_name(const Node& n) { return n.op ? n.op->name.c_str() : "?"; }
+
+void accumulate_into(Tensor& dst, const Tensor& src) {
+  if (dst.shape() != src.shape() || dst.dtype() != src.dtype())
+    fail("accumulate_into: ", describe(dst), " += ", describe(src));
+  dispatch_float(dst.dtype(), "accumulate_into", [&]<class T>() {
+    T* d = dst.data<T>();
+    const T* s = src.data<T>();
+    const int64_t n = dst.numel();
+#pragma omp parallel for if (n > (1 << 16))
+    for (int64_t i = 0; i < n; ++i) d[i] += s[i];
+  });
+}
+
+namespace {
+
+struct PendingGrad {
+  Tensor value;
+  bool owned = false;  // may be modified in place
+};
+
+void add_pending(PendingGrad& p, const Tensor& g) {
+  if (!p.value.defined()) {
+    p.value = g;
+    p.owned = false;
+    return;
+  }
+  if (!p.owned) {
+    p.value = p.value.clone();
+    p.owned = true;
+  }
+  accumulate_into(p.value, g);
+}
+
+void accumulate_leaf(TensorImpl& leaf, const Tensor& g) {
+  if (!leaf.grad) {
+    leaf.grad = g.clone().impl_ptr();
+    return;
+  }
+  Tensor acc(leaf.grad);
+  accumulate_into(acc, g);
+}
+
+// Nodes reachable from `root`, each after every node that consumes its output.
+std::vector<std::shared_ptr<Node>> reverse_topological(const std::shared_ptr<Node>& root) {
+  std::vector<std::shared_ptr<Node>> post_order;
+  std::unordered_set<Node*> seen{root.get()};
+  std::vector<std::pair<std::shared_ptr<Node>, size_t>> stack{{root, 0}};
+  while (!stack.empty()) {
+    auto& top = stack.back();
+    if (top.second < top.first->inputs.size()) {
+      std::shared_ptr<Node> child = top.first->inputs[top.second++].grad_fn();
+      if (child && seen.insert(child.get()).second) stack.emplace_back(std::move(child), 0);
+    } else {
+      post_order.push_back(std::move(top.first));
+      stack.pop_back();
+    }
+  }
+  return {post_order.rbegin(), post_order.rend()};
+}
+
+}  // namespace
+
+void run_backward(const Tensor& root, const Tensor& grad_root, bool retain_graph) {
+  if (!root.requires_grad())
+    fail("backward: the tensor does not require grad (no input of its graph has "
+         "requires_grad set, or it was computed under no_grad)");
+  if (!grad_root.defined() || grad_root.shape() != root.shape() ||
+      grad_root.dtype() != root.dtype())
+    fail("backward: output gradient ", describe(grad_root), " does not match output ",
+         describe(root));
+  if (root.is_leaf()) {
+    accumulate_leaf(*root.impl(), grad_root);
+    return;
+  }
+  const std::vector<std::shared_ptr<Node>> order = reverse_topological(root.grad_fn());
+  std::unordered_map<Node*, PendingGrad> pending;
+  pending[root.grad_fn().get()].value = grad_root;
+
+  NoGradGuard no_grad;
+  for (const std::shared_ptr<Node>& node : order) {
+    auto it = pending.find(node.get());
+    if (it == pending.end()) continue;
+    const Tensor g = std::move(it->second.value);
+    pending.erase(it);
+    if (node->released)
+      fail("backward: the graph through op '", node_op_name(*node),
+           "' was freed by an earlier backward; pass retain_graph=true to that call");
+    const BackwardContext ctx{node->inputs, node->output, g,
+                              node->attrs,  node->saved,  node->needs_grad};
+    std::vector<Tensor> grads = node->op->backward(ctx);
+    if (grads.size() != node->inputs.size())
+      fail("backward of op '", node->op->name, "' returned ", grads.size(),
+           " gradients for ", node->inputs.size(), " inputs");
+    for (size_t i = 0; i < grads.size(); ++i) {
+      if (!node->needs_grad[i] || !grads[i].defined()) continue;
+      const Tensor& input = node->inputs[i];
+      if (grads[i].shape() != input.shape() || grads[i].dtype() != input.dtype())
+        fail("backward of op '", node->op->name, "' returned ", describe(grads[i]),
+             " for input ", i, " of ", describe(input));
+      if (auto producer = input.grad_fn())
+        add_pending(pending[producer.get()], grads[i]);
+      else
+        accumulate_leaf(*input.impl(), grads[i]);
+    }
+    if (!retain_graph) {
+      // Free what this node kept for its backward; the graph cannot be run again.
+      node->inputs.clear();
+      node->saved.clear();
+      node->output = Tensor();
+      node->released = true;
+    }
+  }
+}
+
+}  // namespace weft

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs weft's Debian packages if any is missing (idempotent: a no-op when all are
+# present). Needs root or sudo for apt-get.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libsuitesparse-dev libtbb-dev libopencv-dev libyaml-cpp-dev
+  nlohmann-json3-dev libcli11-dev libspdlog-dev libassimp-dev assimp-testmodels
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=""
+  if [ "$(id -u)" != 0 ]; then sudo_cmd="sudo"; fi
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
