@@ -63,6 +63,7 @@ GradcheckResult gradcheck(const GradcheckCase& c, const GradcheckOptions& o) {
   NoGradGuard no_grad;
   std::ostringstream first_failure;
   bool ok = true;
+  double diff_sq = 0, numeric_sq = 0;
   for (int w : wrt) {
     Tensor analytic = leaves[w].grad();
     if (!analytic.defined()) analytic = Tensor::zeros(leaves[w].shape(), DType::F64);
@@ -81,7 +82,9 @@ GradcheckResult gradcheck(const GradcheckCase& c, const GradcheckOptions& o) {
       const double a = analytic.data<double>()[k];
       const double err = std::abs(a - numeric);
       res.max_abs_error = std::max(res.max_abs_error, err);
-      res.max_rel_error = std::max(res.max_rel_error, err / std::max(std::abs(numeric), 1e-12));
+      res.max_rel_error = std::max(res.max_rel_error, err / std::max(std::abs(numeric), 1.0));
+      diff_sq += err * err;
+      numeric_sq += numeric * numeric;
       ++res.elements;
       if (!(err <= o.atol + o.rtol * std::abs(numeric))) {
         if (ok)
@@ -92,9 +95,11 @@ GradcheckResult gradcheck(const GradcheckCase& c, const GradcheckOptions& o) {
     }
   }
   res.passed = ok;
+  res.norm_rel_error = std::sqrt(diff_sq) / std::max(std::sqrt(numeric_sq), 1e-300);
   std::ostringstream msg;
   msg << c.op << " / " << c.name << ": " << res.elements << " elements, max abs error "
-      << res.max_abs_error << ", max rel error " << res.max_rel_error;
+      << res.max_abs_error << ", max rel error " << res.max_rel_error
+      << ", normwise rel error " << res.norm_rel_error;
   if (!ok) msg << "; first failure " << first_failure.str();
   res.message = msg.str();
   return res;

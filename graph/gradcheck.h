@@ -39,7 +39,8 @@ struct GradcheckOptions {
 struct GradcheckResult {
   bool passed = false;
   double max_abs_error = 0;
-  double max_rel_error = 0;  // |a − n| / max(|n|, 1e-12) over checked elements
+  double max_rel_error = 0;   // max over elements of |a − n| / max(|n|, 1)
+  double norm_rel_error = 0;  // ‖a − n‖₂ / max(‖n‖₂, 1e-300) over all checked elements
   int64_t elements = 0;
   std::string message;  // the first failing element, or a summary
 };

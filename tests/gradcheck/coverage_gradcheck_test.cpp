@@ -2,6 +2,7 @@
 // and every case must pass in float64 against central differences.
 #include <gtest/gtest.h>
 
+#include <iostream>
 #include <set>
 
 #include "graph/gradcheck.h"
@@ -33,6 +34,7 @@ TEST_P(Gradcheck, MatchesCentralDifferences) {
   const GradcheckCase& c = gradcheck_cases().at(GetParam());
   const GradcheckResult r = gradcheck(c);
   EXPECT_TRUE(r.passed) << r.message;
+  std::cout << "  " << r.message << "\n";
   RecordProperty("max_abs_error", std::to_string(r.max_abs_error));
 }
 
