@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
       "weft: physics-aware monocular human performance capture on the CPU.\n"
       "Run `weft <command> --help` for a command's options."};
   app.require_subcommand(1);
+  weft::num_threads();  // applies WEFT_NUM_THREADS before any parallel work
   int threads = 0;
   app.add_option("--threads", threads, "Thread budget for OpenMP and TBB (0: all cores; "
                                        "also WEFT_NUM_THREADS)");
