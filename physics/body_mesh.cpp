@@ -1,0 +1,255 @@
+#include "physics/body_mesh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+namespace {
+
+enum class Region { face, edge01, edge12, edge20, vertex0, vertex1, vertex2 };
+
+// Closest point to p on triangle (a, b, c) and the feature it lies on (Ericson,
+// Real-Time Collision Detection, 5.1.5).
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                    const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                    Region& region) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) {
+    region = Region::vertex0;
+    return a;
+  }
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) {
+    region = Region::vertex1;
+    return b;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    region = Region::edge01;
+    return a + (d1 / (d1 - d3)) * ab;
+  }
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) {
+    region = Region::vertex2;
+    return c;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    region = Region::edge20;
+    return a + (d2 / (d2 - d6)) * ac;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    region = Region::edge12;
+    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  region = Region::face;
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+double box_distance2(const Eigen::Vector3d& p, const Eigen::Vector3d& lo,
+                     const Eigen::Vector3d& hi) {
+  const Eigen::Vector3d d = (lo - p).cwiseMax(p - hi).cwiseMax(0.0);
+  return d.squaredNorm();
+}
+
+}  // namespace
+
+BodyMesh::BodyMesh(Eigen::MatrixX3d vertices, std::vector<std::array<int, 3>> faces,
+                   std::vector<int> inactive_faces)
+    : vertices_(std::move(vertices)), faces_(std::move(faces)) {
+  const int nv = static_cast<int>(vertices_.rows());
+  std::vector<char> inactive(faces_.size(), 0);
+  for (int f : inactive_faces) {
+    WEFT_CHECK(f >= 0 && f < static_cast<int>(faces_.size()), "body mesh: inactive face ", f,
+               " outside [0, ", faces_.size(), ")");
+    inactive[f] = 1;
+  }
+  for (size_t f = 0; f < faces_.size(); ++f) {
+    for (int v : faces_[f])
+      WEFT_CHECK(v >= 0 && v < nv, "body mesh: face ", f, " has vertex ", v, " outside [0, ",
+                 nv, ")");
+    if (!inactive[f]) active_.push_back(static_cast<int>(f));
+  }
+  if (!active_.empty()) {
+    nodes_.reserve(2 * active_.size());
+    build(0, static_cast<int>(active_.size()));
+  }
+  compute_normals();
+}
+
+int BodyMesh::build(int begin, int end) {
+  const int id = static_cast<int>(nodes_.size());
+  nodes_.emplace_back();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  Eigen::Vector3d clo = lo, chi = hi;  // centroid bounds
+  for (int k = begin; k < end; ++k) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int v : faces_[active_[k]]) {
+      const Eigen::Vector3d p = vertices_.row(v).transpose();
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      centroid += p / 3.0;
+    }
+    clo = clo.cwiseMin(centroid);
+    chi = chi.cwiseMax(centroid);
+  }
+  nodes_[id].lo = lo;
+  nodes_[id].hi = hi;
+  if (end - begin <= 4) {
+    nodes_[id].begin = begin;
+    nodes_[id].end = end;
+    return id;
+  }
+  int axis;
+  (chi - clo).maxCoeff(&axis);
+  const int mid = (begin + end) / 2;
+  auto centroid_on = [&](int f) {
+    double s = 0;
+    for (int v : faces_[f]) s += vertices_(v, axis);
+    return s;
+  };
+  std::nth_element(active_.begin() + begin, active_.begin() + mid, active_.begin() + end,
+                   [&](int a, int b) { return centroid_on(a) < centroid_on(b); });
+  const int left = build(begin, mid);
+  const int right = build(mid, end);
+  nodes_[id].left = left;
+  nodes_[id].right = right;
+  return id;
+}
+
+void BodyMesh::refit(int id) {
+  Node& n = nodes_[id];
+  if (n.left < 0) {
+    n.lo = Eigen::Vector3d::Constant(1e300);
+    n.hi = -n.lo;
+    for (int k = n.begin; k < n.end; ++k)
+      for (int v : faces_[active_[k]]) {
+        n.lo = n.lo.cwiseMin(vertices_.row(v).transpose());
+        n.hi = n.hi.cwiseMax(vertices_.row(v).transpose());
+      }
+    return;
+  }
+  refit(n.left);
+  refit(n.right);
+  n.lo = nodes_[n.left].lo.cwiseMin(nodes_[n.right].lo);
+  n.hi = nodes_[n.left].hi.cwiseMax(nodes_[n.right].hi);
+}
+
+void BodyMesh::set_vertices(const Eigen::MatrixX3d& vertices) {
+  WEFT_CHECK(vertices.rows() == vertices_.rows(), "body mesh: ", vertices.rows(),
+             " new vertices for a mesh of ", vertices_.rows());
+  vertices_ = vertices;
+  if (!nodes_.empty()) refit(0);
+  compute_normals();
+}
+
+void BodyMesh::compute_normals() {
+  const int nv = static_cast<int>(vertices_.rows());
+  face_normals_.assign(faces_.size(), Eigen::Vector3d::Zero());
+  vertex_normals_.assign(nv, Eigen::Vector3d::Zero());
+  edge_normals_.assign(faces_.size(), {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                       Eigen::Vector3d::Zero()});
+  std::map<std::pair<int, int>, Eigen::Vector3d> edge_sum;
+  for (int f : active_) {
+    const auto& t = faces_[f];
+    Eigen::Vector3d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = vertices_.row(t[k]).transpose();
+    const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double len = n.norm();
+    face_normals_[f] = len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+      const double denom = e1.norm() * e2.norm();
+      const double angle = denom > 0 ? std::acos(std::clamp(e1.dot(e2) / denom, -1.0, 1.0)) : 0;
+      vertex_normals_[t[k]] += angle * face_normals_[f];
+      const int i = t[k], j = t[(k + 1) % 3];
+      edge_sum[{std::min(i, j), std::max(i, j)}] += face_normals_[f];
+    }
+  }
+  for (auto& n : vertex_normals_)
+    if (n.norm() > 0) n.normalize();
+  for (int f : active_)
+    for (int k = 0; k < 3; ++k) {
+      const int i = faces_[f][k], j = faces_[f][(k + 1) % 3];
+      const Eigen::Vector3d s = edge_sum[{std::min(i, j), std::max(i, j)}];
+      edge_normals_[f][k] = s.norm() > 0 ? Eigen::Vector3d(s.normalized()) : face_normals_[f];
+    }
+}
+
+ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance) const {
+  ClosestPoint best;
+  if (nodes_.empty()) return best;
+  double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance
+                                               : std::numeric_limits<double>::infinity();
+  Region best_region = Region::face;
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (box_distance2(x, n.lo, n.hi) >= best_d2) continue;
+    if (n.left < 0) {
+      for (int k = n.begin; k < n.end; ++k) {
+        const auto& t = faces_[active_[k]];
+        Region region;
+        const Eigen::Vector3d p = closest_on_triangle(
+            x, vertices_.row(t[0]).transpose(), vertices_.row(t[1]).transpose(),
+            vertices_.row(t[2]).transpose(), region);
+        const double d2 = (x - p).squaredNorm();
+        if (d2 < best_d2) {
+          best_d2 = d2;
+          best.point = p;
+          best.face = active_[k];
+          best_region = region;
+        }
+      }
+      continue;
+    }
+    // Visit the nearer child first (pushed last).
+    const double dl = box_distance2(x, nodes_[n.left].lo, nodes_[n.left].hi);
+    const double dr = box_distance2(x, nodes_[n.right].lo, nodes_[n.right].hi);
+    if (dl < dr) {
+      stack[top++] = n.right;
+      stack[top++] = n.left;
+    } else {
+      stack[top++] = n.left;
+      stack[top++] = n.right;
+    }
+  }
+  if (best.face < 0) return best;
+  const auto& t = faces_[best.face];
+  switch (best_region) {
+    case Region::face: best.normal = face_normals_[best.face]; break;
+    case Region::edge01: best.normal = edge_normals_[best.face][0]; break;
+    case Region::edge12: best.normal = edge_normals_[best.face][1]; break;
+    case Region::edge20: best.normal = edge_normals_[best.face][2]; break;
+    case Region::vertex0: best.normal = vertex_normals_[t[0]]; break;
+    case Region::vertex1: best.normal = vertex_normals_[t[1]]; break;
+    case Region::vertex2: best.normal = vertex_normals_[t[2]]; break;
+  }
+  best.face_interior = best_region == Region::face;
+  const int edge = best_region == Region::edge01   ? 0
+                   : best_region == Region::edge12 ? 1
+                   : best_region == Region::edge20 ? 2
+                                                   : -1;
+  if (edge >= 0) {
+    best.on_edge = true;
+    best.edge_direction =
+        (vertices_.row(t[(edge + 1) % 3]) - vertices_.row(t[edge])).transpose().normalized();
+  }
+  const double unsigned_distance = std::sqrt(best_d2);
+  best.distance = (x - best.point).dot(best.normal) < 0 ? -unsigned_distance : unsigned_distance;
+  return best;
+}
+
+}  // namespace weft::physics

@@ -1,0 +1,60 @@
+#pragma once
+// A triangle mesh obstacle (the body) with an AABB tree for closest-point queries and
+// signed distances. The sign comes from the closest feature's pseudo-normal: the face
+// normal inside a face, the angle-weighted vertex normal at a vertex, the sum of the two
+// face normals on an edge (Bærentzen & Aanæs 2005), so it is exact for closed meshes.
+// Faces marked inactive are left out of the tree entirely (not collided with).
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+namespace weft::physics {
+
+struct ClosestPoint {
+  double distance = 0;       // signed, metres; > 0 outside
+  Eigen::Vector3d point;     // closest point on the surface
+  Eigen::Vector3d normal;    // pseudo-normal of the closest feature (unit)
+  int face = -1;             // closest face, -1 when the mesh has no active face
+  bool face_interior = false;  // true when the closest point is inside the face
+  bool on_edge = false;        // true when it is inside an edge (not at a vertex)
+  Eigen::Vector3d edge_direction = Eigen::Vector3d::Zero();  // unit, when on_edge
+};
+
+class BodyMesh {
+ public:
+  BodyMesh() = default;
+  // vertices: n × 3 positions in metres; inactive: faces left out of collisions.
+  BodyMesh(Eigen::MatrixX3d vertices, std::vector<std::array<int, 3>> faces,
+           std::vector<int> inactive_faces = {});
+
+  // Moves the vertices (same count) and refits the tree; normals are recomputed.
+  void set_vertices(const Eigen::MatrixX3d& vertices);
+
+  const Eigen::MatrixX3d& vertices() const { return vertices_; }
+  const std::vector<std::array<int, 3>>& faces() const { return faces_; }
+  int num_active_faces() const { return static_cast<int>(active_.size()); }
+
+  // Closest point on the active surface; nodes farther than `max_distance` are pruned (the
+  // result then has face = -1 if nothing is that close).
+  ClosestPoint closest_point(const Eigen::Vector3d& x,
+                             double max_distance = std::numeric_limits<double>::infinity()) const;
+
+ private:
+  struct Node {
+    Eigen::Vector3d lo, hi;
+    int left = -1, right = -1;  // children, or -1 for a leaf
+    int begin = 0, end = 0;     // leaf range in active_
+  };
+  int build(int begin, int end);
+  void refit(int node);
+  void compute_normals();
+
+  Eigen::MatrixX3d vertices_;
+  std::vector<std::array<int, 3>> faces_;
+  std::vector<int> active_;          // active face ids, reordered by the tree
+  std::vector<Node> nodes_;
+  std::vector<Eigen::Vector3d> face_normals_, vertex_normals_;
+  std::vector<std::array<Eigen::Vector3d, 3>> edge_normals_;  // per face, edge (k, k+1)
+};
+
+}  // namespace weft::physics

@@ -1,0 +1,59 @@
+#include "physics/cloth_metrics.h"
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+void measure_penetration(const ClothSimulator& sim, const Positions& x, FrameMetrics& m) {
+  const int n = sim.mesh().num_vertices();
+  WEFT_CHECK(x.size() == 3 * n, "metrics: frame has ", x.size(), " entries, expected ", 3 * n);
+  double sum = 0;
+  m.penetration_max = 0;
+  m.penetrating_vertices = 0;
+  m.min_signed_distance = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < n; ++i) {
+    const double d = sim.signed_distance(x.segment<3>(3 * i));
+    m.min_signed_distance = std::min(m.min_signed_distance, d);
+    if (d < 0) {
+      sum += -d;
+      m.penetration_max = std::max(m.penetration_max, -d);
+      ++m.penetrating_vertices;
+    }
+  }
+  m.penetration_mean = m.penetrating_vertices > 0 ? sum / m.penetrating_vertices : 0.0;
+}
+
+void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
+                            const Positions& x_prev, const Positions& x, double h,
+                            FrameMetrics& m) {
+  const int n = sim.mesh().num_vertices();
+  WEFT_CHECK(x.size() == 3 * n && x_prev.size() == x.size() && x_prev2.size() == x.size(),
+             "metrics: frames must have ", 3 * n, " entries");
+  WEFT_CHECK(h > 0, "metrics: time step must be > 0 s, got ", h);
+  const Positions f = sim.total_force(x);
+  const Positions a = (x - 2.0 * x_prev + x_prev2) / (h * h);
+  const double g = sim.settings().gravity.norm();
+  double sum = 0, sum_rel = 0;
+  m.oob_force_max = m.oob_force_max_rel = 0;
+  for (int i = 0; i < n; ++i) {
+    const double mass = sim.mesh().mass[i];
+    const double r = (mass * a.segment<3>(3 * i) - f.segment<3>(3 * i)).norm();
+    const double rel = g > 0 ? r / (mass * g) : 0.0;
+    sum += r;
+    sum_rel += rel;
+    m.oob_force_max = std::max(m.oob_force_max, r);
+    m.oob_force_max_rel = std::max(m.oob_force_max_rel, rel);
+  }
+  m.oob_force_mean = sum / n;
+  m.oob_force_mean_rel = sum_rel / n;
+}
+
+FrameMetrics frame_metrics(const ClothSimulator& sim, const Positions& x_prev2,
+                           const Positions& x_prev, const Positions& x, double h) {
+  FrameMetrics m;
+  measure_penetration(sim, x, m);
+  measure_out_of_balance(sim, x_prev2, x_prev, x, h, m);
+  return m;
+}
+
+}  // namespace weft::physics

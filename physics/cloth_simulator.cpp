@@ -1,0 +1,143 @@
+#include "physics/cloth_simulator.h"
+
+#include <chrono>
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+void validate(const SimulationSettings& s) {
+  validate(s.material);
+  WEFT_CHECK(std::isfinite(s.time_step) && s.time_step > 0, "simulation: time_step must be > 0 s, got ", s.time_step);
+  WEFT_CHECK(s.substeps >= 1, "simulation: substeps must be >= 1, got ", s.substeps);
+  WEFT_CHECK(s.gravity.allFinite(), "simulation: gravity must be finite");
+  WEFT_CHECK(s.collision_thickness > 0, "simulation: collision thickness must be > 0 m, got ",
+             s.collision_thickness);
+  WEFT_CHECK(s.collision_stiffness > 0, "simulation: collision stiffness must be > 0 N/m, got ",
+             s.collision_stiffness);
+  WEFT_CHECK(s.pin_stiffness > 0, "simulation: pin stiffness must be > 0 N/m, got ", s.pin_stiffness);
+  WEFT_CHECK(s.constraint_stiffness >= 0, "simulation: constraint stiffness must be >= 0 N/m, got ",
+             s.constraint_stiffness);
+}
+
+ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
+    : mesh_(std::move(mesh)), settings_(std::move(settings)) {
+  validate(settings_);
+  const int n = mesh_.num_vertices();
+  inertia_ = std::make_unique<InertiaEnergy>(mesh_.mass, settings_.time_step);
+  gravity_ = std::make_unique<GravityEnergy>(mesh_.mass, settings_.gravity);
+  membrane_ = std::make_unique<MembraneEnergy>(mesh_, settings_.material);
+  bending_ = std::make_unique<BendingEnergy>(mesh_, settings_.material);
+  pins_ = std::make_unique<PinEnergy>(std::vector<int>{}, std::vector<Vec3>{},
+                                      settings_.pin_stiffness);
+  rays_ = std::make_unique<RayConstraintEnergy>(std::vector<RayTarget>{},
+                                                std::max(settings_.constraint_stiffness, 0.0));
+  collision_ = std::make_unique<CollisionEnergy>(n, settings_.collision_thickness,
+                                                 settings_.collision_stiffness);
+  solver_ = std::make_unique<NewtonSolver>(
+      n,
+      std::vector<Energy*>{inertia_.get(), gravity_.get(), membrane_.get(), bending_.get(),
+                           pins_.get(), rays_.get(), collision_.get()},
+      settings_.newton);
+}
+
+void ClothSimulator::set_pins(std::vector<int> vertices, std::vector<Vec3> targets) {
+  for (int v : vertices)
+    WEFT_CHECK(v >= 0 && v < mesh_.num_vertices(), "pins: vertex ", v, " outside [0, ",
+               mesh_.num_vertices(), ")");
+  if (targets.empty())
+    for (int v : vertices) targets.push_back(mesh_.rest_vertex(v));
+  *pins_ = PinEnergy(std::move(vertices), std::move(targets), settings_.pin_stiffness);
+}
+
+void ClothSimulator::set_spheres(std::vector<SphereObstacle> spheres) {
+  for (const auto& s : spheres)
+    WEFT_CHECK(s.radius > 0 && s.center.allFinite(), "sphere obstacle: radius must be > 0 m, got ",
+               s.radius);
+  collision_->set_spheres(std::move(spheres));
+}
+
+int ClothSimulator::add_body(BodyMesh body) {
+  bodies_.push_back(std::make_unique<BodyMesh>(std::move(body)));
+  std::vector<const BodyMesh*> ptrs;
+  for (const auto& b : bodies_) ptrs.push_back(b.get());
+  collision_->set_bodies(std::move(ptrs));
+  return static_cast<int>(bodies_.size()) - 1;
+}
+
+void ClothSimulator::set_ray_targets(std::vector<RayTarget> targets) {
+  for (const auto& t : targets)
+    WEFT_CHECK(t.vertex >= 0 && t.vertex < mesh_.num_vertices(), "ray constraint: vertex ",
+               t.vertex, " outside [0, ", mesh_.num_vertices(), ")");
+  *rays_ = RayConstraintEnergy(std::move(targets), settings_.constraint_stiffness);
+}
+
+NewtonReport ClothSimulator::advance(Positions& x, Positions& v, double h) {
+  WEFT_CHECK(x.size() == 3 * mesh_.num_vertices() && v.size() == x.size(),
+             "cloth step: state has ", x.size(), " entries, expected ", 3 * mesh_.num_vertices());
+  inertia_->set_time_step(h);
+  const Positions x_start = x;
+  Positions x_hat = x + h * v;
+  if (!x_hat.allFinite()) x_hat = x;  // a non-finite velocity carries no information
+  inertia_->set_prediction(x_hat);
+  for (Energy* e : solver_->energies()) e->begin_step(x);
+  // Newton starts from the last state rather than the prediction x̂: a prediction that
+  // has tunnelled through a thin obstacle would be pushed out on the wrong side.
+  Positions x_new = x_start;
+  NewtonReport report = solver_->minimize(x_new);
+  if (!x_new.allFinite()) {
+    x_new = x_start;
+    report.status = StepStatus::non_finite;
+  }
+  v = (x_new - x_start) / h;
+  x = std::move(x_new);
+  return report;
+}
+
+StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_prev,
+                                const Eigen::MatrixX3d* body_prev,
+                                const Eigen::MatrixX3d* body_now) {
+  const auto t0 = std::chrono::steady_clock::now();
+  WEFT_CHECK((body_prev == nullptr) == (body_now == nullptr),
+             "cloth step: give both body_prev and body_now, or neither");
+  WEFT_CHECK(body_prev == nullptr || !bodies_.empty(),
+             "cloth step: body positions given but the simulator has no body mesh");
+  const double h = settings_.time_step;
+  const int substeps = settings_.substeps;
+  const double hs = h / substeps;
+  StepResult result;
+  result.x = x_prev;
+  Positions v = (x_prev - x_prev2) / h;
+  if (!v.allFinite()) v.setZero();
+  if (!result.x.allFinite()) {
+    result.status = StepStatus::non_finite;
+    result.x = x_prev2.allFinite() ? x_prev2 : mesh_.rest;
+    result.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return result;
+  }
+  for (int s = 0; s < substeps; ++s) {
+    if (body_now) {
+      const double t = static_cast<double>(s + 1) / substeps;
+      bodies_[0]->set_vertices((1.0 - t) * (*body_prev) + t * (*body_now));
+    }
+    NewtonReport r = advance(result.x, v, hs);
+    result.newton_iterations += r.iterations;
+    if (static_cast<int>(r.status) > static_cast<int>(result.status)) result.status = r.status;
+    result.gradient_norm = r.gradient_norm;
+    result.energy = r.energy;
+    result.last = std::move(r);
+  }
+  result.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+Positions ClothSimulator::total_force(const Positions& x) const {
+  Positions g = Positions::Zero(x.size());
+  const Energy* forces[] = {gravity_.get(), membrane_.get(), bending_.get(),
+                            pins_.get(),    rays_.get(),     collision_.get()};
+  for (const Energy* e : forces)
+    e->evaluate(x, &g, nullptr);
+  return -g;
+}
+
+}  // namespace weft::physics

@@ -1,0 +1,94 @@
+#pragma once
+// One cloth with its obstacles, advanced by fully implicit Euler: each step minimises
+//   E(x) = 1/(2h²)‖x − x_n − h v_n‖²_M + W_membrane + W_bend − f_gravityᵀx
+//          + E_pins + E_collision(x; obstacles) + E_cons(x)
+// with the Newton solver. The simulator is the layer S of the method (see step()).
+#include <memory>
+#include <vector>
+
+#include "physics/bending_energy.h"
+#include "physics/body_mesh.h"
+#include "physics/cloth_model.h"
+#include "physics/collision_energy.h"
+#include "physics/membrane_energy.h"
+#include "physics/newton_solver.h"
+#include "physics/vertex_energies.h"
+
+namespace weft::physics {
+
+struct SimulationSettings {
+  double time_step = 0.01;  // seconds per frame
+  int substeps = 1;         // implicit Euler steps per frame
+  Vec3 gravity{0.0, -9.81, 0.0};  // m/s²
+  ClothMaterial material;
+  double collision_thickness = 0.005;  // m
+  double collision_stiffness = 1.0e4;  // N/m
+  double pin_stiffness = 1.0e4;        // N/m
+  double constraint_stiffness = 1.0e2; // N/m, silhouette rays
+  NewtonOptions newton;
+};
+// Throws weft::Error naming the field if a value is non-physical.
+void validate(const SimulationSettings& settings);
+
+struct StepResult {
+  Positions x;                 // 3n, finite: the last good state if a step failed
+  StepStatus status = StepStatus::converged;  // worst over sub-steps
+  int newton_iterations = 0;   // summed over sub-steps
+  double gradient_norm = 0;    // ‖∇E‖∞ after the last sub-step, N
+  double energy = 0;           // incremental potential after the last sub-step, J
+  double step_ms = 0;
+  NewtonReport last;           // the last sub-step's report (timings)
+};
+
+class ClothSimulator {
+ public:
+  ClothSimulator(ClothMesh mesh, SimulationSettings settings);
+  ClothSimulator(const ClothSimulator&) = delete;
+  ClothSimulator& operator=(const ClothSimulator&) = delete;
+
+  const ClothMesh& mesh() const { return mesh_; }
+  const SimulationSettings& settings() const { return settings_; }
+  NewtonSolver& solver() { return *solver_; }
+
+  // Soft pins holding `vertices` at `targets` (default: their rest positions).
+  void set_pins(std::vector<int> vertices, std::vector<Vec3> targets = {});
+  void set_spheres(std::vector<SphereObstacle> spheres);
+  // Adds a body mesh obstacle; returns its index.
+  int add_body(BodyMesh body);
+  BodyMesh& body(int index) { return *bodies_.at(index); }
+  int num_bodies() const { return static_cast<int>(bodies_.size()); }
+  void set_ray_targets(std::vector<RayTarget> targets);
+
+  // One implicit Euler step of length h from (x, v); on return x = x_{n+1} and
+  // v = (x_{n+1} − x_n)/h. A failed step leaves x at the last accepted Newton iterate
+  // (or unchanged) and never makes it non-finite.
+  NewtonReport advance(Positions& x, Positions& v, double h);
+
+  // The layer S(x_{t−2}, x_{t−1}, body_{t−1}, body_t) → x_t: the velocity comes from the
+  // two previous states, body 0 moves linearly from body_prev to body_now over the
+  // settings' sub-steps (pass null pointers for static obstacles).
+  StepResult step(const Positions& x_prev2, const Positions& x_prev,
+                  const Eigen::MatrixX3d* body_prev = nullptr,
+                  const Eigen::MatrixX3d* body_now = nullptr);
+
+  // Forces at x (N, 3n): internal (membrane + bending), external (gravity, pins,
+  // silhouette rays) and collision, summed.
+  Positions total_force(const Positions& x) const;
+  // Smallest signed distance of a point to any obstacle (m; +inf without obstacles).
+  double signed_distance(const Vec3& p) const { return collision_->min_signed_distance(p); }
+
+ private:
+  ClothMesh mesh_;
+  SimulationSettings settings_;
+  std::unique_ptr<InertiaEnergy> inertia_;
+  std::unique_ptr<GravityEnergy> gravity_;
+  std::unique_ptr<MembraneEnergy> membrane_;
+  std::unique_ptr<BendingEnergy> bending_;
+  std::unique_ptr<PinEnergy> pins_;
+  std::unique_ptr<RayConstraintEnergy> rays_;
+  std::unique_ptr<CollisionEnergy> collision_;
+  std::vector<std::unique_ptr<BodyMesh>> bodies_;
+  std::unique_ptr<NewtonSolver> solver_;
+};
+
+}  // namespace weft::physics

@@ -1,0 +1,101 @@
+#include "physics/collision_energy.h"
+
+#include <Eigen/Eigenvalues>
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+DistanceSample signed_distance(const SphereObstacle& sphere, const Eigen::Vector3d& x) {
+  DistanceSample s;
+  const Eigen::Vector3d r = x - sphere.center;
+  const double len = r.norm();
+  s.distance = len - sphere.radius;
+  if (len > 1e-12) {
+    s.gradient = r / len;
+    s.hessian = (Eigen::Matrix3d::Identity() - s.gradient * s.gradient.transpose()) / len;
+  } else {
+    s.gradient = Eigen::Vector3d::UnitY();  // any direction out of the centre
+  }
+  return s;
+}
+
+DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x) {
+  DistanceSample s;
+  const ClosestPoint c = body.closest_point(x);
+  if (c.face < 0) return s;
+  s.distance = c.distance;
+  const Eigen::Vector3d r = x - c.point;
+  const double len = r.norm();
+  if (c.face_interior || len < 1e-12) {
+    s.gradient = c.normal;  // d = n·(x − p) is linear in x inside a face
+  } else {
+    const double sign = c.distance < 0 ? -1.0 : 1.0;
+    const Eigen::Vector3d u = r / len;
+    s.gradient = sign * u;
+    // Curvature of the distance: none along an edge the closest point slides on.
+    Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - u * u.transpose();
+    if (c.on_edge) p -= c.edge_direction * c.edge_direction.transpose();
+    s.hessian = sign * p / len;
+  }
+  return s;
+}
+
+CollisionEnergy::CollisionEnergy(int num_vertices, double thickness, double stiffness)
+    : n_(num_vertices), thickness_(thickness), k_(stiffness) {
+  WEFT_CHECK(thickness > 0, "collision: thickness must be > 0 m, got ", thickness);
+  WEFT_CHECK(stiffness > 0, "collision: stiffness must be > 0 N/m, got ", stiffness);
+}
+
+void CollisionEnergy::set_bodies(std::vector<const BodyMesh*> bodies) {
+  bodies_ = std::move(bodies);
+  invalidate_cache();
+}
+
+void CollisionEnergy::invalidate_cache() {
+  cache_.assign(bodies_.size(), std::vector<CacheEntry>(n_));
+}
+
+double CollisionEnergy::add_penalty(int i, const DistanceSample& s, Eigen::VectorXd* g,
+                                    SparseHessian* H) const {
+  if (!(s.distance < thickness_)) return 0.0;
+  const double gap = thickness_ - s.distance;
+  if (g) g->segment<3>(3 * i) -= k_ * gap * s.gradient;
+  if (H) {
+    Eigen::Matrix3d h = k_ * (s.gradient * s.gradient.transpose() - gap * s.hessian);
+    if (project_hessian_) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(h);
+      h = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
+          eig.eigenvectors().transpose();
+    }
+    H->add_diagonal_block(i, h);
+  }
+  return 0.5 * k_ * gap * gap;
+}
+
+double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
+                                 SparseHessian* H) const {
+  double energy = 0;
+  for (int i = 0; i < n_; ++i) {
+    const Eigen::Vector3d xi = x.segment<3>(3 * i);
+    for (const auto& sphere : spheres_) energy += add_penalty(i, signed_distance(sphere, xi), g, H);
+    for (size_t b = 0; b < bodies_.size(); ++b) {
+      CacheEntry& c = cache_[b][i];
+      if (c.d_ref > thickness_ && (xi - c.x_ref).norm() < c.d_ref - thickness_) continue;
+      const DistanceSample s = signed_distance(*bodies_[b], xi);
+      c.x_ref = xi;
+      c.d_ref = s.distance;
+      energy += add_penalty(i, s, g, H);
+    }
+  }
+  return energy;
+}
+
+double CollisionEnergy::min_signed_distance(const Eigen::Vector3d& x) const {
+  double d = std::numeric_limits<double>::infinity();
+  for (const auto& sphere : spheres_) d = std::min(d, signed_distance(sphere, x).distance);
+  for (const BodyMesh* body : bodies_) d = std::min(d, signed_distance(*body, x).distance);
+  return d;
+}
+
+}  // namespace weft::physics

@@ -1,0 +1,34 @@
+#pragma once
+// One term of the incremental potential. Each energy computes its value and, when asked,
+// adds its gradient and its (per-element positive semi-definite) Hessian; the Newton
+// solver only sums energies. Positions are 3n vectors in metres; energies in joules.
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "physics/sparse_hessian.h"
+
+namespace weft::physics {
+
+class Energy {
+ public:
+  virtual ~Energy() = default;
+  virtual std::string name() const = 0;
+  // Returns E(x); adds ∇E(x) to *gradient and the projected Hessian to *hessian when
+  // they are not null.
+  virtual double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* gradient,
+                          SparseHessian* hessian) const = 0;
+  // Vertex pairs this energy couples (off-diagonal blocks of its Hessian).
+  virtual void add_pattern(std::vector<std::array<int, 2>>& pairs) const { (void)pairs; }
+  // Called once at the start of each time step, before any evaluate().
+  virtual void begin_step(const Eigen::VectorXd& x_start) { (void)x_start; }
+  // Element Hessians are projected to PSD unless this is switched off (for checking the
+  // exact Hessian against finite differences).
+  void set_hessian_projection(bool on) { project_hessian_ = on; }
+
+ protected:
+  bool project_hessian_ = true;
+};
+
+}  // namespace weft::physics

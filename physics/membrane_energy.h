@@ -1,0 +1,31 @@
+#pragma once
+// StVK plane-stress membrane. Per triangle, F (3×2) maps the rest triangle's 2D frame to
+// its current 3D edges, G = ½(FᵀF − I) is the Green strain and
+//   W = A · t · (μ tr(G²) + λ/2 tr(G)²),  λ = Eν/(1−ν²),  μ = E/(2(1+ν)),
+// with A the rest area (m²), t the thickness (m) and E in Pa: W in joules. The element
+// Hessian is projected to PSD in F-space (6×6), which keeps the 9×9 one PSD.
+#include <vector>
+
+#include "physics/cloth_model.h"
+#include "physics/energy.h"
+
+namespace weft::physics {
+
+class MembraneEnergy : public Energy {
+ public:
+  MembraneEnergy(const ClothMesh& mesh, const ClothMaterial& material);
+  std::string name() const override { return "membrane"; }
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const override;
+  void add_pattern(std::vector<std::array<int, 2>>& pairs) const override;
+
+ private:
+  struct Element {
+    std::array<int, 3> v;
+    Eigen::Matrix<double, 3, 2> beta;  // F = Σ_v x_v β_vᵀ
+    double weight;                     // rest area × thickness, m³
+  };
+  std::vector<Element> elements_;
+  double lambda_, mu_;
+};
+
+}  // namespace weft::physics

@@ -1,0 +1,184 @@
+#include "physics/newton_solver.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+namespace {
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+const char* to_string(StepStatus s) {
+  switch (s) {
+    case StepStatus::converged: return "converged";
+    case StepStatus::max_iterations: return "max_iterations";
+    case StepStatus::line_search_failed: return "line_search_failed";
+    case StepStatus::non_finite: return "non_finite";
+  }
+  return "unknown";
+}
+
+NewtonSolver::NewtonSolver(int num_vertices, std::vector<Energy*> energies, NewtonOptions options)
+    : n_(num_vertices), energies_(std::move(energies)), options_(options) {
+  WEFT_CHECK(options_.max_iterations >= 1, "newton: max_iterations must be >= 1, got ",
+             options_.max_iterations);
+  WEFT_CHECK(options_.tolerance > 0, "newton: tolerance must be > 0, got ", options_.tolerance);
+  std::vector<std::array<int, 2>> pairs;
+  for (const Energy* e : energies_) e->add_pattern(pairs);
+  hessian_ = SparseHessian(n_, pairs);
+  cholmod_ = std::make_unique<CholmodSolver>(hessian_);
+}
+
+double NewtonSolver::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
+                              std::vector<double>* ms) const {
+  if (g) g->setZero(3 * n_);
+  if (h) h->set_zero();
+  double e = 0;
+  for (size_t k = 0; k < energies_.size(); ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    e += energies_[k]->evaluate(x, g, h);
+    if (ms) (*ms)[k] += ms_since(t0);
+  }
+  return e;
+}
+
+double NewtonSolver::energy(const Eigen::VectorXd& x) const {
+  return evaluate(x, nullptr, nullptr, nullptr);
+}
+
+double NewtonSolver::gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+  return evaluate(x, &g, nullptr, nullptr);
+}
+
+const SparseHessian& NewtonSolver::hessian(const Eigen::VectorXd& x) {
+  evaluate(x, nullptr, &hessian_, nullptr);
+  return hessian_;
+}
+
+bool NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
+                                NewtonReport& report) {
+  // Preconditioned CG on (H + δI) d = −g with the (possibly older) Cholesky factor.
+  const Eigen::VectorXd b = -g;
+  d.setZero(b.size());
+  Eigen::VectorXd r = b;
+  Eigen::VectorXd z = cholmod_->solve(r);
+  Eigen::VectorXd p = z;
+  double rz = r.dot(z);
+  const double target = options_.cg_relative_tolerance * b.norm();
+  for (int k = 0; k < options_.cg_max_iterations; ++k) {
+    Eigen::VectorXd hp = hessian_.multiply(p);
+    hp += delta_ * p;
+    const double php = p.dot(hp);
+    if (!(php > 0)) return false;  // not positive definite along p
+    const double alpha = rz / php;
+    d += alpha * p;
+    r -= alpha * hp;
+    ++report.cg_iterations;
+    if (r.norm() <= target) return true;
+    z = cholmod_->solve(r);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  return false;
+}
+
+bool NewtonSolver::direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  bool ok = false;
+  for (int attempt = 0; attempt < 40 && !ok; ++attempt) {
+    const bool reuse = options_.linear_solver == LinearSolverKind::reused_factor;
+    if (reuse && !factor_stale_ && cholmod_->has_factor()) {
+      if (cg_direction(g, d, report) && g.dot(d) < 0 && d.allFinite()) {
+        ok = true;
+        break;
+      }
+      factor_stale_ = true;  // CG too slow or failed: refresh the factor and retry
+      continue;
+    }
+    hessian_.add_to_diagonal(delta_);
+    const bool factored = cholmod_->factorize(hessian_);
+    hessian_.add_to_diagonal(-delta_);
+    ++report.factorizations;
+    if (factored) {
+      d = -cholmod_->solve(g);
+      factor_stale_ = false;
+      if (d.allFinite() && g.dot(d) < 0) {
+        ok = true;
+        break;
+      }
+    } else {
+      factor_stale_ = true;
+    }
+    delta_ = delta_ == 0 ? delta_floor_ : 10.0 * delta_;
+  }
+  report.linear_solve_ms += ms_since(t0);
+  return ok;
+}
+
+NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
+  WEFT_CHECK(x.size() == 3 * n_, "newton: x has ", x.size(), " entries, expected ", 3 * n_);
+  const auto t_start = std::chrono::steady_clock::now();
+  NewtonReport report;
+  report.energy_ms.assign(energies_.size(), 0.0);
+  Eigen::VectorXd g(3 * n_), g_new(3 * n_), d(3 * n_), x_new(3 * n_);
+  double e = x.allFinite() ? evaluate(x, &g, nullptr, &report.energy_ms) : NAN;
+  auto finish = [&](StepStatus s) {
+    report.status = s;
+    report.energy = e;
+    report.gradient_norm = g.allFinite() ? g.lpNorm<Eigen::Infinity>() : NAN;
+    report.regularization = delta_;
+    report.total_ms = ms_since(t_start);
+    return report;
+  };
+  if (!std::isfinite(e) || !g.allFinite()) return finish(StepStatus::non_finite);
+  report.accepted_energies.push_back(e);
+  for (int it = 0; it < options_.max_iterations; ++it) {
+    if (g.lpNorm<Eigen::Infinity>() <= options_.tolerance) return finish(StepStatus::converged);
+    evaluate(x, nullptr, &hessian_, &report.energy_ms);
+    if (delta_floor_ == 0) {
+      // Regularisation starts from a tiny fraction of the Hessian's scale (N/m).
+      double diag = 0;
+      for (int c = 0; c < hessian_.rows(); ++c)
+        diag += std::abs(hessian_.values()[hessian_.column_starts()[c + 1] - 1]);
+      delta_floor_ = std::max(1e-8 * diag / hessian_.rows(), 1e-12);
+    }
+    bool accepted = false;
+    for (int retry = 0; retry < 4 && !accepted; ++retry) {
+      if (!direction(g, d, report)) break;
+      const double slope = g.dot(d);
+      double alpha = 1.0;
+      for (int b = 0; b < options_.max_backtracks; ++b, alpha *= 0.5) {
+        x_new = x + alpha * d;
+        const double e_new = evaluate(x_new, nullptr, nullptr, &report.energy_ms);
+        if (std::isfinite(e_new) && e_new <= e + options_.armijo * alpha * slope) {
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {
+        // No sufficient decrease along the Newton direction: bend it toward −∇E.
+        delta_ = std::max(10.0 * delta_, 1e3 * delta_floor_);
+        factor_stale_ = true;
+      }
+    }
+    if (!accepted) return finish(StepStatus::line_search_failed);
+    const double e_new = evaluate(x_new, &g_new, nullptr, &report.energy_ms);
+    if (!std::isfinite(e_new) || !g_new.allFinite()) return finish(StepStatus::non_finite);
+    x.swap(x_new);
+    g.swap(g_new);
+    e = e_new;
+    report.accepted_energies.push_back(e);
+    report.iterations = it + 1;
+    delta_ = delta_ <= delta_floor_ ? 0.0 : 0.1 * delta_;
+  }
+  if (g.lpNorm<Eigen::Infinity>() <= options_.tolerance) return finish(StepStatus::converged);
+  return finish(StepStatus::max_iterations);
+}
+
+}  // namespace weft::physics

@@ -1,0 +1,84 @@
+#pragma once
+// Minimises a sum of energies by Newton's method: a fixed-pattern sparse Hessian, a
+// CHOLMOD solve (symbolic analysis once), adaptive regularisation H + δI (δ grows when
+// the factorisation fails, the direction is not a descent direction or the line search
+// fails, and shrinks after a success) and an Armijo back-tracking line search. The
+// solver never leaves x non-finite: a failed iteration keeps the last accepted iterate.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "physics/cholmod_solver.h"
+#include "physics/energy.h"
+#include "physics/sparse_hessian.h"
+
+namespace weft::physics {
+
+enum class StepStatus { converged, max_iterations, line_search_failed, non_finite };
+const char* to_string(StepStatus status);
+
+enum class LinearSolverKind {
+  direct,         // a fresh Cholesky factorisation every Newton iteration
+  reused_factor,  // CG on the current Hessian, preconditioned by the last factorisation;
+                  // refactorised when CG needs more than cg_max_iterations
+};
+
+struct NewtonOptions {
+  int max_iterations = 50;
+  double tolerance = 1e-6;     // on ‖∇E‖∞, newtons
+  double armijo = 1e-4;        // sufficient-decrease constant
+  int max_backtracks = 40;
+  LinearSolverKind linear_solver = LinearSolverKind::direct;
+  int cg_max_iterations = 25;
+  double cg_relative_tolerance = 1e-4;  // of the residual relative to ‖∇E‖
+};
+
+struct NewtonReport {
+  StepStatus status = StepStatus::max_iterations;
+  int iterations = 0;
+  double gradient_norm = 0;   // ‖∇E‖∞ at the returned x, N
+  double energy = 0;          // J
+  int factorizations = 0;
+  int cg_iterations = 0;
+  double regularization = 0;  // δ after the step, N/m
+  std::vector<double> accepted_energies;  // E after each accepted iteration (first: start)
+  // Wall time split, milliseconds: energies' evaluate (by energy, values and derivatives),
+  // numeric factorisation + solves, everything.
+  std::vector<double> energy_ms;
+  double linear_solve_ms = 0;
+  double total_ms = 0;
+};
+
+class NewtonSolver {
+ public:
+  // Energies are not owned and must outlive the solver.
+  NewtonSolver(int num_vertices, std::vector<Energy*> energies, NewtonOptions options = {});
+  NewtonReport minimize(Eigen::VectorXd& x);
+
+  double energy(const Eigen::VectorXd& x) const;
+  // Returns E and writes ∇E.
+  double gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
+  // The projected Hessian at x (for tests).
+  const SparseHessian& hessian(const Eigen::VectorXd& x);
+
+  NewtonOptions& options() { return options_; }
+  const std::vector<Energy*>& energies() const { return energies_; }
+
+ private:
+  double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
+                  std::vector<double>* ms) const;
+  // Direction d with (H + δI) d = −g; false if no descent direction was found.
+  bool direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
+  bool cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
+
+  int n_;
+  std::vector<Energy*> energies_;
+  NewtonOptions options_;
+  SparseHessian hessian_;
+  std::unique_ptr<CholmodSolver> cholmod_;
+  double delta_ = 0;
+  double delta_floor_ = 0;
+  bool factor_stale_ = true;  // the reused factor must be refreshed before use
+};
+
+}  // namespace weft::physics

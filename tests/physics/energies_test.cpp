@@ -1,0 +1,212 @@
+// Finite-difference checks of every energy's gradient and Hessian, PSD projection, and
+// the invariance of the internal energies under rigid motions.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include "physics/bending_energy.h"
+#include "physics/cloth_model.h"
+#include "physics/collision_energy.h"
+#include "physics/membrane_energy.h"
+#include "physics/vertex_energies.h"
+#include "tests/physics/physics_test_util.h"
+
+namespace weft::physics {
+namespace {
+
+ClothMesh small_grid(int n = 4) {
+  return make_grid_cloth(Vec3(0, 0, 0), 0.3, 0.3, n, n, "xz", 0.2);
+}
+
+Eigen::VectorXd perturbed(const Eigen::VectorXd& x, double scale, double noise, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> nd(0.0, noise);
+  Eigen::VectorXd y = scale * x;
+  for (int i = 0; i < y.size(); ++i) y[i] += nd(rng);
+  return y;
+}
+
+ClothMaterial material() {
+  ClothMaterial m;
+  m.youngs_modulus = 5e5;
+  m.poisson_ratio = 0.3;
+  m.bending_stiffness = 1e-3;
+  m.thickness = 1e-3;
+  return m;
+}
+
+TEST(Energies, InertiaMatchesFiniteDifferences) {
+  const ClothMesh mesh = small_grid();
+  InertiaEnergy e(mesh.mass, 0.01);
+  e.set_prediction(perturbed(mesh.rest, 1.0, 0.01, 1));
+  testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.0, 0.01, 2));
+}
+
+TEST(Energies, GravityMatchesFiniteDifferences) {
+  const ClothMesh mesh = small_grid();
+  GravityEnergy e(mesh.mass, Vec3(0, -9.81, 0));
+  // Linear energy: its Hessian is zero, and the gradient is −m g.
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(mesh.rest.size());
+  e.evaluate(mesh.rest, &g, nullptr);
+  EXPECT_NEAR(g[1], mesh.mass[0] * 9.81, 1e-15);
+  testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.0, 0.01, 3));
+}
+
+TEST(Energies, MembraneMatchesFiniteDifferencesStretchedAndCompressed) {
+  const ClothMesh mesh = small_grid();
+  MembraneEnergy e(mesh, material());
+  testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.2, 0.01, 4));
+  testing::expect_derivatives_match(e, perturbed(mesh.rest, 0.8, 0.02, 5));
+}
+
+TEST(Energies, MembraneMatchesUniaxialStretchFormula) {
+  // Stretch a single right triangle by s along x: G = diag((s²−1)/2, 0), so
+  // W = A t (μ + λ/2) ((s²−1)/2)².
+  const Positions rest = (Eigen::VectorXd(9) << 0, 0, 0, 1, 0, 0, 0, 0, 1).finished();
+  const ClothMesh mesh = make_cloth_mesh(rest, {{0, 2, 1}}, 0.2);
+  const ClothMaterial m = material();
+  MembraneEnergy e(mesh, m);
+  const double s = 1.1;
+  Positions x = rest;
+  x[3] = s;
+  const double lambda = m.youngs_modulus * m.poisson_ratio / (1 - m.poisson_ratio * m.poisson_ratio);
+  const double mu = m.youngs_modulus / (2 * (1 + m.poisson_ratio));
+  const double gxx = 0.5 * (s * s - 1);
+  EXPECT_NEAR(e.evaluate(x, nullptr, nullptr), 0.5 * m.thickness * (mu + 0.5 * lambda) * gxx * gxx,
+              1e-12);
+}
+
+TEST(Energies, BendingMatchesFiniteDifferences) {
+  const ClothMesh mesh = small_grid();
+  BendingEnergy e(mesh, material());
+  testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.0, 0.02, 6));
+}
+
+TEST(Energies, BendingOfCurvedRestShapeMatchesFiniteDifferences) {
+  // A rest shape with non-zero rest angles (a grid bent into a cylinder arc).
+  ClothMesh flat = small_grid(5);
+  Positions rest = flat.rest;
+  for (int i = 0; i < flat.num_vertices(); ++i) {
+    const double u = rest[3 * i];
+    rest[3 * i] = std::sin(u * 3.0) / 3.0;
+    rest[3 * i + 1] = (1 - std::cos(u * 3.0)) / 3.0;
+  }
+  const ClothMesh mesh = make_cloth_mesh(rest, flat.triangles, 0.2);
+  BendingEnergy e(mesh, material());
+  EXPECT_NEAR(e.evaluate(mesh.rest, nullptr, nullptr), 0.0, 1e-18);
+  testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.0, 0.02, 7));
+}
+
+TEST(Energies, DihedralAngleOfAFoldIsSigned) {
+  const Vec3 x0(0, 0, 0), x1(1, 0, 0), x2(0.5, 0, -1);
+  const double a = 0.7;  // fold the second triangle by `a` radians about the x axis
+  const Vec3 x3(0.5, std::sin(a), std::cos(a));
+  const Vec3 x3m(0.5, -std::sin(a), std::cos(a));
+  EXPECT_NEAR(std::abs(dihedral_angle(x0, x1, x2, x3)), a, 1e-12);
+  EXPECT_NEAR(dihedral_angle(x0, x1, x2, x3), -dihedral_angle(x0, x1, x2, x3m), 1e-12);
+  EXPECT_NEAR(dihedral_angle(x0, x1, x2, Vec3(0.5, 0, 1)), 0.0, 1e-12);
+}
+
+TEST(Energies, PinsAndRaysMatchFiniteDifferences) {
+  const ClothMesh mesh = small_grid();
+  PinEnergy pins({0, 3, 7}, {Vec3(0, 0.1, 0), Vec3(0.2, 0, 0), Vec3(0, 0, 0.3)}, 50.0);
+  testing::expect_derivatives_match(pins, perturbed(mesh.rest, 1.0, 0.01, 8));
+  RayConstraintEnergy rays({{1, Vec3(0, 1, 0), Vec3(0.1, -1, 0.2)}, {5, Vec3(1, 1, 1), Vec3(-1, -1, -1)}},
+                           30.0);
+  testing::expect_derivatives_match(rays, perturbed(mesh.rest, 1.0, 0.01, 9));
+}
+
+TEST(Energies, RayConstraintIsZeroOnTheRay) {
+  RayConstraintEnergy rays({{0, Vec3(0, 1, 0), Vec3(0, -2, 0)}}, 30.0);
+  EXPECT_NEAR(rays.evaluate(Eigen::Vector3d(0, -3, 0), nullptr, nullptr), 0.0, 1e-15);
+  EXPECT_NEAR(rays.evaluate(Eigen::Vector3d(0.1, -3, 0), nullptr, nullptr), 0.5 * 30 * 0.01, 1e-12);
+}
+
+TEST(Energies, SphereCollisionMatchesFiniteDifferences) {
+  // Points inside, within and outside the collision band of a sphere.
+  const int n = 4;
+  Eigen::VectorXd x(3 * n);
+  x << 0.0, 0.48, 0.01, 0.3, 0.0, 0.22, -0.1, -0.2, 0.4, 0.0, 0.0, 0.9;
+  CollisionEnergy e(n, 0.05, 1e4);
+  e.set_spheres({{Vec3(0, 0, 0), 0.5}});
+  testing::expect_derivatives_match(e, x);
+}
+
+TEST(Energies, MeshCollisionMatchesFiniteDifferences) {
+  // Near a cube's face (inside and outside), edge and corner: face, edge and vertex
+  // regions of the closest-point query.
+  const BodyMesh box = testing::cube(Vec3(0, 0, 0), 0.5);
+  const int n = 5;
+  Eigen::VectorXd x(3 * n);
+  x << 0.1, 0.52, -0.2,   // above the top face
+      0.2, 0.49, 0.1,     // just inside the top face
+      0.52, 0.53, 0.1,    // beside an edge
+      0.52, 0.51, 0.53,   // beside a corner
+      0.0, 2.0, 0.0;      // far away
+  CollisionEnergy e(n, 0.05, 1e4);
+  e.set_bodies({&box});
+  testing::expect_derivatives_match(e, x);
+}
+
+TEST(Energies, BodyMeshSignedDistance) {
+  const BodyMesh sphere = testing::uv_sphere(Vec3(0, 1, 0), 0.3);
+  EXPECT_LT(sphere.closest_point(Vec3(0, 1, 0)).distance, -0.28);
+  EXPECT_NEAR(sphere.closest_point(Vec3(0.7, 1, 0)).distance, 0.4, 0.01);
+  EXPECT_NEAR(sphere.closest_point(Vec3(0, 1.5, 0)).distance, 0.2, 1e-9);  // a pole vertex
+  // The tree gives the same answer as brute force over every face.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  for (int k = 0; k < 200; ++k) {
+    const Vec3 p(u(rng), 1 + u(rng), u(rng));
+    double best = 1e300;
+    for (const auto& f : sphere.faces()) {
+      // Brute force on a fine sampling is not exact; compare with each face's own query.
+      Eigen::MatrixX3d v(3, 3);
+      for (int a = 0; a < 3; ++a) v.row(a) = sphere.vertices().row(f[a]);
+      BodyMesh one(v, {{0, 1, 2}});
+      best = std::min(best, std::abs(one.closest_point(p).distance));
+    }
+    EXPECT_NEAR(std::abs(sphere.closest_point(p).distance), best, 1e-12);
+  }
+}
+
+TEST(Energies, RigidMotionsGiveZeroMembraneAndBendingForce) {
+  ClothMesh flat = small_grid(5);
+  Positions rest = flat.rest;
+  for (int i = 0; i < flat.num_vertices(); ++i) rest[3 * i + 1] = 0.1 * std::sin(5 * rest[3 * i]);
+  const ClothMesh mesh = make_cloth_mesh(rest, flat.triangles, 0.2);
+  MembraneEnergy membrane(mesh, material());
+  BendingEnergy bending(mesh, material());
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.9, Eigen::Vector3d(1, 2, -0.5).normalized()).toRotationMatrix();
+  Positions x(rest.size());
+  for (int i = 0; i < mesh.num_vertices(); ++i)
+    x.segment<3>(3 * i) = R * rest.segment<3>(3 * i) + Vec3(0.3, -1.0, 2.0);
+  for (const Energy* e : {static_cast<const Energy*>(&membrane), static_cast<const Energy*>(&bending)}) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+    const double w = e->evaluate(x, &g, nullptr);
+    EXPECT_NEAR(w, 0.0, 1e-14) << e->name();
+    EXPECT_LT(g.lpNorm<Eigen::Infinity>(), 1e-9) << e->name();
+  }
+  // A non-rigid motion does produce forces (the test can fail).
+  Positions y = x;
+  y[0] += 0.01;
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+  membrane.evaluate(y, &g, nullptr);
+  EXPECT_GT(g.lpNorm<Eigen::Infinity>(), 1e-3);
+}
+
+TEST(SparseHessian, MultiplyMatchesFullMatrix) {
+  const ClothMesh mesh = small_grid();
+  MembraneEnergy e(mesh, material());
+  std::vector<std::array<int, 2>> pairs;
+  e.add_pattern(pairs);
+  SparseHessian h(mesh.num_vertices(), pairs);
+  e.evaluate(perturbed(mesh.rest, 1.1, 0.01, 11), nullptr, &h);
+  h.add_to_diagonal(0.5);
+  const Eigen::VectorXd v = perturbed(mesh.rest, 1.0, 1.0, 12);
+  EXPECT_LT((h.multiply(v) - h.to_full() * v).norm(), 1e-9 * v.norm());
+}
+
+}  // namespace
+}  // namespace weft::physics
