@@ -6,16 +6,16 @@
 //   dW    [O, K]  += dy_n · col_nᵀ
 //   dcol  [K, P]   = Wᵀ · dy_n,  dx_n = col2im(dcol)   (1×1 fast path: dx_n = Wᵀ · dy_n)
 //
-// Threading: with at least as many images as threads, OpenMP runs images in parallel and
-// each GEMM is single-threaded (measured faster at batch 8 on the ResNet-50 shapes than
-// one image at a time through Eigen's threaded GEMM: see docs/BENCHMARKS.md); with fewer
-// images than threads the images run in turn and Eigen threads each GEMM. Every thread
-// reuses one column buffer across calls (thread_local), so the hot loop allocates nothing.
+// Threading (see conv_plan): OpenMP over groups of images, each GEMM single-threaded,
+// when there are at least as many images as threads — at batch 8 this beat running the
+// images in turn through Eigen's threaded GEMM on every ResNet-50 shape we timed (see
+// docs/BENCHMARKS.md) — else the images in turn with Eigen's threaded GEMM. Each thread
+// reuses its column and staging buffers across calls (thread_local): the hot loop does
+// not allocate.
 #include <omp.h>
 
 #include <Eigen/Core>
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -102,15 +102,15 @@ inline void valid_range(int64_t off, int64_t sw, int64_t W, int64_t Wo, int64_t&
   hi = std::clamp(hi, lo, Wo);
 }
 
-// x [C, H, W] -> col [K, P]; padding reads as 0.
+// x [C, H, W] -> the columns of one image in col [K, ld] (its P columns start at col;
+// ld ≥ P when several images share the matrix); padding reads as 0.
 template <class T>
-void im2col(const T* x, const ConvGeometry& g, T* col) {
-  const int64_t P = g.P();
+void im2col(const T* x, const ConvGeometry& g, T* col, int64_t ld) {
   for (int64_t c = 0; c < g.C; ++c) {
     const T* xc = x + c * g.H * g.W;
     for (int64_t ki = 0; ki < g.kh; ++ki) {
       for (int64_t kj = 0; kj < g.kw; ++kj) {
-        T* row = col + ((c * g.kh + ki) * g.kw + kj) * P;
+        T* row = col + ((c * g.kh + ki) * g.kw + kj) * ld;
         const int64_t off_w = kj * g.dw - g.pw;
         int64_t lo, hi;
         valid_range(off_w, g.sw, g.W, g.Wo, lo, hi);
@@ -135,15 +135,14 @@ void im2col(const T* x, const ConvGeometry& g, T* col) {
   }
 }
 
-// dx [C, H, W] += col2im(dcol [K, P]); the adjoint of im2col.
+// dx [C, H, W] += col2im(dcol); the adjoint of im2col (same layout and ld).
 template <class T>
-void col2im_add(const T* dcol, const ConvGeometry& g, T* dx) {
-  const int64_t P = g.P();
+void col2im_add(const T* dcol, const ConvGeometry& g, T* dx, int64_t ld) {
   for (int64_t c = 0; c < g.C; ++c) {
     T* xc = dx + c * g.H * g.W;
     for (int64_t ki = 0; ki < g.kh; ++ki) {
       for (int64_t kj = 0; kj < g.kw; ++kj) {
-        const T* row = dcol + ((c * g.kh + ki) * g.kw + kj) * P;
+        const T* row = dcol + ((c * g.kh + ki) * g.kw + kj) * ld;
         const int64_t off_w = kj * g.dw - g.pw;
         int64_t lo, hi;
         valid_range(off_w, g.sw, g.W, g.Wo, lo, hi);
@@ -163,9 +162,21 @@ void col2im_add(const T* dcol, const ConvGeometry& g, T* dx) {
   }
 }
 
-// One reusable column buffer per thread and dtype; grows to the largest size asked for.
+// Copies rows×P blocks between one image's [rows, P] matrix and its columns in a shared
+// [rows, ld] matrix.
 template <class T>
-T* column_buffer(int64_t elements) {
+void pack_image(const T* src, int64_t rows, int64_t P, T* dst, int64_t ld) {
+  for (int64_t r = 0; r < rows; ++r) std::memcpy(dst + r * ld, src + r * P, sizeof(T) * P);
+}
+template <class T>
+void unpack_image(const T* src, int64_t rows, int64_t P, int64_t ld, T* dst) {
+  for (int64_t r = 0; r < rows; ++r) std::memcpy(dst + r * P, src + r * ld, sizeof(T) * P);
+}
+
+// Reusable scratch per thread, dtype and use (0: columns, 1: output/gradient staging);
+// grows to the largest size asked for and is kept across calls.
+template <class T, int Use>
+T* scratch(int64_t elements) {
   thread_local std::vector<T> buffer;
   if (static_cast<int64_t>(buffer.size()) < elements) {
     buffer.clear();
@@ -175,25 +186,57 @@ T* column_buffer(int64_t elements) {
   return buffer.data();
 }
 
-// Runs body(n) for every image: in parallel over images when there are at least as
-// many images as threads (each GEMM then runs single-threaded), else in turn with
-// Eigen's threaded GEMM.
-bool batch_parallel(int64_t N);
+// How the batch is cut: images are taken in groups of G whose columns share one GEMM
+// (G·P columns), so that the small late-stage images (P = Ho·Wo = 16..64 at 128×128
+// input) still give the GEMM a wide right-hand side: a single-threaded GEMM reached
+// ~65 (P = 16, one image) vs ~95 GFLOP/s (64+ columns) on this machine. With at least as
+// many images as threads the groups run in parallel, each GEMM single-threaded, and G is
+// capped so every thread gets the same number of groups; with fewer images than threads
+// (e.g. one image at inference) the images run in turn and Eigen threads each GEMM.
+struct ConvPlan {
+  int64_t G, groups;
+  bool parallel;
+};
+
+constexpr int64_t kMinGemmColumns = 512;
+
+ConvPlan conv_plan(const ConvGeometry& g) {
+  const int64_t threads = num_threads();
+  ConvPlan p{1, g.N, false};
+  while (p.G < g.N && p.G * g.P() < kMinGemmColumns) ++p.G;
+  if (threads > 1 && g.N >= threads) {
+    p.G = std::min(p.G, g.N / threads);
+    const int64_t per_thread = ((g.N + p.G - 1) / p.G + threads - 1) / threads;
+    p.G = (g.N + per_thread * threads - 1) / (per_thread * threads);
+    p.parallel = true;
+  }
+  p.groups = (g.N + p.G - 1) / p.G;
+  return p;
+}
+
 template <class F>
-void for_each_image(int64_t N, F body) {
-  const int threads = num_threads();
-  if (batch_parallel(N)) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int64_t n = 0; n < N; ++n) body(n);
+void for_each_group(const ConvPlan& p, F body) {
+  if (p.parallel) {
+#pragma omp parallel for num_threads(num_threads()) schedule(static)
+    for (int64_t i = 0; i < p.groups; ++i) body(i);
   } else {
-    for (int64_t n = 0; n < N; ++n) body(n);
+    for (int64_t i = 0; i < p.groups; ++i) body(i);
   }
 }
 
-bool batch_parallel(int64_t N) {
-  static const bool force_gemm = std::getenv("WEFT_CONV_GEMM_THREADS") != nullptr;  // TEMP
-  const int threads = num_threads();
-  return !force_gemm && threads > 1 && N >= threads;
+// Builds the column matrix [K, Gi·P] of images [n0, n0 + Gi); returns it (for one
+// pointwise image: the image itself, no copy).
+template <class T>
+const T* build_columns(const T* x, const ConvGeometry& g, int64_t n0, int64_t Gi) {
+  const int64_t CHW = g.C * g.H * g.W, P = g.P(), ld = Gi * P;
+  if (g.pointwise() && Gi == 1) return x + n0 * CHW;
+  T* col = scratch<T, 0>(g.K() * ld);
+  for (int64_t j = 0; j < Gi; ++j) {
+    const T* xn = x + (n0 + j) * CHW;
+    if (g.pointwise()) pack_image(xn, g.C, P, col + j * P, ld);
+    else im2col(xn, g, col + j * P, ld);
+  }
+  return col;
 }
 
 template <class T>
@@ -206,17 +249,17 @@ Tensor conv_forward(const std::vector<Tensor>& in, const ConvGeometry& g) {
   const T* pb = in.size() == 3 ? in[2].data<T>() : nullptr;
   T* py = y.data<T>();
   CMapMat<T> Wm(w.data<T>(), g.O, K);
-  for_each_image(g.N, [&](int64_t n) {
-    const T* xn = px + n * g.C * g.H * g.W;
-    const T* col = xn;
-    if (!g.pointwise()) {
-      T* buf = column_buffer<T>(K * P);
-      im2col(xn, g, buf);
-      col = buf;
-    }
-    Eigen::Map<RowMat<T>> Y(py + n * g.O * P, g.O, P);
-    Y.noalias() = Wm * CMapMat<T>(col, K, P);
+  const ConvPlan plan = conv_plan(g);
+  for_each_group(plan, [&](int64_t gi) {
+    const int64_t n0 = gi * plan.G, Gi = std::min(plan.G, g.N - n0), ld = Gi * P;
+    const T* col = build_columns(px, g, n0, Gi);
+    // One image writes straight into y; a group is staged and then split per image.
+    T* out = Gi == 1 ? py + n0 * g.O * P : scratch<T, 1>(g.O * ld);
+    Eigen::Map<RowMat<T>> Y(out, g.O, ld);
+    Y.noalias() = Wm * CMapMat<T>(col, K, ld);
     if (pb) Y.colwise() += CMapVec<T>(pb, g.O);
+    if (Gi > 1)
+      for (int64_t j = 0; j < Gi; ++j) unpack_image(out + j * P, g.O, P, ld, py + (n0 + j) * g.O * P);
   });
   return y;
 }
@@ -228,13 +271,14 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
   const Tensor& gy = c.grad_output;
   const bool want_x = c.needs_grad[0], want_w = c.needs_grad[1];
   const bool want_b = c.inputs.size() == 3 && c.needs_grad[2];
-  const int64_t K = g.K(), P = g.P();
+  const int64_t K = g.K(), P = g.P(), CHW = g.C * g.H * g.W;
   const T* px = x.data<T>();
   const T* pgy = gy.data<T>();
   CMapMat<T> Wm(w.data<T>(), g.O, K);
 
   Tensor gx, gw, gb;
-  if (want_x) gx = Tensor::zeros(x.shape(), x.dtype());
+  // gx is zeroed image by image inside the (parallel) loop, where it is first touched.
+  if (want_x) gx = Tensor::empty(x.shape(), x.dtype());
   if (want_w) gw = Tensor::zeros(w.shape(), w.dtype());
   if (want_b) {
     gb = Tensor::zeros({g.O}, x.dtype());
@@ -250,42 +294,52 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
   };
   if (!want_x && !want_w) return result();
 
-  // Weight-gradient accumulators: one per thread in the batch-parallel case (summed at
-  // the end in a fixed order, so results do not depend on scheduling).
-  const bool parallel = batch_parallel(g.N);
-  const int slots = parallel ? num_threads() : 1;
-  std::vector<RowMat<T>> gw_parts;
-  if (want_w) gw_parts.assign(slots, RowMat<T>::Zero(g.O, K));
+  // Weight gradient: thread 0 accumulates into gw, the others into their own matrix,
+  // summed at the end in a fixed order (results do not depend on scheduling).
+  const ConvPlan plan = conv_plan(g);
+  const int slots = plan.parallel ? num_threads() : 1;
+  std::vector<RowMat<T>> gw_extra;
+  if (want_w) gw_extra.assign(slots - 1, RowMat<T>::Zero(g.O, K));
+  T* pgw = want_w ? gw.data<T>() : nullptr;
   T* pgx = want_x ? gx.data<T>() : nullptr;
 
-  for_each_image(g.N, [&](int64_t n) {
-    const int slot = parallel ? omp_get_thread_num() : 0;
-    const T* xn = px + n * g.C * g.H * g.W;
-    CMapMat<T> GY(pgy + n * g.O * P, g.O, P);
+  for_each_group(plan, [&](int64_t gi) {
+    const int slot = plan.parallel ? omp_get_thread_num() : 0;
+    const int64_t n0 = gi * plan.G, Gi = std::min(plan.G, g.N - n0), ld = Gi * P;
+    // dy of the group as [O, Gi·P]
+    const T* dy = pgy + n0 * g.O * P;
+    if (Gi > 1) {
+      T* stage = scratch<T, 1>(g.O * ld);
+      for (int64_t j = 0; j < Gi; ++j) pack_image(pgy + (n0 + j) * g.O * P, g.O, P, stage + j * P, ld);
+      dy = stage;
+    }
+    CMapMat<T> GY(dy, g.O, ld);
     if (want_w) {
-      const T* col = xn;
-      if (!g.pointwise()) {
-        T* buf = column_buffer<T>(K * P);
-        im2col(xn, g, buf);
-        col = buf;
-      }
-      gw_parts[slot].noalias() += GY * CMapMat<T>(col, K, P).transpose();
+      const T* col = build_columns(px, g, n0, Gi);
+      Eigen::Map<RowMat<T>> GW(slot == 0 ? pgw : gw_extra[slot - 1].data(), g.O, K);
+      GW.noalias() += GY * CMapMat<T>(col, K, ld).transpose();
     }
     if (want_x) {
-      T* gxn = pgx + n * g.C * g.H * g.W;
-      if (g.pointwise()) {
-        Eigen::Map<RowMat<T>>(gxn, g.C, P).noalias() = Wm.transpose() * GY;
+      if (g.pointwise() && Gi == 1) {
+        Eigen::Map<RowMat<T>>(pgx + n0 * CHW, g.C, P).noalias() = Wm.transpose() * GY;
       } else {
-        T* buf = column_buffer<T>(K * P);
-        Eigen::Map<RowMat<T>> DCOL(buf, K, P);
-        DCOL.noalias() = Wm.transpose() * GY;
-        col2im_add(buf, g, gxn);
+        T* dcol = scratch<T, 0>(K * ld);  // the columns are no longer needed
+        Eigen::Map<RowMat<T>>(dcol, K, ld).noalias() = Wm.transpose() * GY;
+        for (int64_t j = 0; j < Gi; ++j) {
+          T* gxn = pgx + (n0 + j) * CHW;
+          if (g.pointwise()) {
+            unpack_image(dcol + j * P, g.C, P, ld, gxn);
+          } else {
+            std::fill(gxn, gxn + CHW, T(0));
+            col2im_add(dcol + j * P, g, gxn, ld);
+          }
+        }
       }
     }
   });
   if (want_w) {
-    Eigen::Map<RowMat<T>> GW(gw.data<T>(), g.O, K);
-    for (const RowMat<T>& part : gw_parts) GW += part;
+    Eigen::Map<RowMat<T>> GW(pgw, g.O, K);
+    for (const RowMat<T>& part : gw_extra) GW += part;
   }
   return result();
 }

@@ -117,7 +117,9 @@ INSTANTIATE_TEST_SUITE_P(
         ConvCase{2, 2, 8, 9, 3, 2, 5, opts(1, 2, 0, 2), true},         // non-square kernel
         ConvCase{1, 5, 6, 7, 2, 3, 1, opts(3, 1, 1, 0, 1, 3), false},  // mixed
         ConvCase{4, 3, 5, 5, 2, 5, 5, opts(1, 1, 0, 0), true},         // kernel = input
-        ConvCase{8, 4, 6, 6, 3, 3, 3, opts(1, 1, 1, 1), true}));       // batch >= threads
+        ConvCase{8, 4, 6, 6, 3, 3, 3, opts(1, 1, 1, 1), true},         // batch >= threads
+        ConvCase{5, 3, 6, 6, 4, 3, 3, opts(2, 2, 1, 1), true},         // uneven image groups
+        ConvCase{7, 6, 4, 4, 5, 1, 1, opts(1, 1, 0, 0), true}));       // grouped 1x1
 
 TEST(ConvReference, Float64MatchesFloat32) {
   Generator gen(7);
