@@ -173,7 +173,8 @@ void unpack_image(const T* src, int64_t rows, int64_t P, int64_t ld, T* dst) {
   for (int64_t r = 0; r < rows; ++r) std::memcpy(dst + r * P, src + r * ld, sizeof(T) * P);
 }
 
-// Reusable scratch per thread, dtype and use (0: columns, 1: output/gradient staging);
+// Reusable scratch per thread, dtype and use (0: columns, 1: output/gradient staging,
+// 2: weight-gradient accumulator);
 // grows to the largest size asked for and is kept across calls.
 template <class T, int Use>
 T* scratch(int64_t elements) {
@@ -279,7 +280,7 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
   Tensor gx, gw, gb;
   // gx is zeroed image by image inside the (parallel) loop, where it is first touched.
   if (want_x) gx = Tensor::empty(x.shape(), x.dtype());
-  if (want_w) gw = Tensor::zeros(w.shape(), w.dtype());
+  if (want_w) gw = Tensor::empty(w.shape(), w.dtype());  // set by thread 0 below
   if (want_b) {
     gb = Tensor::zeros({g.O}, x.dtype());
     T* pgb = gb.data<T>();
@@ -294,30 +295,33 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
   };
   if (!want_x && !want_w) return result();
 
-  // Weight gradient: thread 0 accumulates into gw, the others into their own matrix,
-  // summed at the end in a fixed order (results do not depend on scheduling).
+  // Weight gradient: each thread of the team accumulates its groups into its own
+  // [O, K] matrix (thread 0 straight into gw, the others into reused thread-local
+  // scratch), then the team sums them into gw, rows split across threads, in a fixed
+  // order (results do not depend on scheduling).
   const ConvPlan plan = conv_plan(g);
-  const int slots = plan.parallel ? num_threads() : 1;
-  std::vector<RowMat<T>> gw_extra;
-  if (want_w) gw_extra.assign(slots - 1, RowMat<T>::Zero(g.O, K));
+  const int team = plan.parallel ? num_threads() : 1;
+  std::vector<T*> acc(team, nullptr);
   T* pgw = want_w ? gw.data<T>() : nullptr;
   T* pgx = want_x ? gx.data<T>() : nullptr;
 
-  for_each_group(plan, [&](int64_t gi) {
-    const int slot = plan.parallel ? omp_get_thread_num() : 0;
+  // first: the group's product initialises the accumulator instead of adding to it.
+  auto group = [&](int64_t gi, T* gw_acc, bool first) {
     const int64_t n0 = gi * plan.G, Gi = std::min(plan.G, g.N - n0), ld = Gi * P;
     // dy of the group as [O, Gi·P]
     const T* dy = pgy + n0 * g.O * P;
     if (Gi > 1) {
       T* stage = scratch<T, 1>(g.O * ld);
-      for (int64_t j = 0; j < Gi; ++j) pack_image(pgy + (n0 + j) * g.O * P, g.O, P, stage + j * P, ld);
+      for (int64_t j = 0; j < Gi; ++j)
+        pack_image(pgy + (n0 + j) * g.O * P, g.O, P, stage + j * P, ld);
       dy = stage;
     }
     CMapMat<T> GY(dy, g.O, ld);
     if (want_w) {
       const T* col = build_columns(px, g, n0, Gi);
-      Eigen::Map<RowMat<T>> GW(slot == 0 ? pgw : gw_extra[slot - 1].data(), g.O, K);
-      GW.noalias() += GY * CMapMat<T>(col, K, ld).transpose();
+      Eigen::Map<RowMat<T>> GW(gw_acc, g.O, K);
+      if (first) GW.noalias() = GY * CMapMat<T>(col, K, ld).transpose();
+      else GW.noalias() += GY * CMapMat<T>(col, K, ld).transpose();
     }
     if (want_x) {
       if (g.pointwise() && Gi == 1) {
@@ -330,16 +334,37 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
           if (g.pointwise()) {
             unpack_image(dcol + j * P, g.C, P, ld, gxn);
           } else {
-            std::fill(gxn, gxn + CHW, T(0));
+            std::fill(gxn, gxn + CHW, T(0));  // first touch by the thread that fills it
             col2im_add(dcol + j * P, g, gxn, ld);
           }
         }
       }
     }
-  });
-  if (want_w) {
-    Eigen::Map<RowMat<T>> GW(pgw, g.O, K);
-    for (const RowMat<T>& part : gw_extra) GW += part;
+  };
+  // Thread t of a team of nt runs groups [groups·t/nt, groups·(t+1)/nt).
+  auto run_share = [&](int t, int nt) {
+    const int64_t g0 = plan.groups * t / nt, g1 = plan.groups * (t + 1) / nt;
+    T* gw_acc = nullptr;
+    if (want_w) {
+      gw_acc = acc[t] = t == 0 ? pgw : scratch<T, 2>(g.O * K);
+      if (g0 == g1) std::fill(gw_acc, gw_acc + g.O * K, T(0));  // no group to initialise it
+    }
+    for (int64_t gi = g0; gi < g1; ++gi) group(gi, gw_acc, gi == g0);
+  };
+  if (team == 1) {
+    run_share(0, 1);
+  } else {
+#pragma omp parallel num_threads(team)
+    {
+      const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+      run_share(t, nt);
+      if (want_w) {
+#pragma omp barrier
+        const int64_t r0 = g.O * t / nt, r1 = g.O * (t + 1) / nt;
+        Eigen::Map<RowMat<T>> rows(pgw + r0 * K, r1 - r0, K);
+        for (int s = 1; s < nt; ++s) rows += CMapMat<T>(acc[s] + r0 * K, r1 - r0, K);
+      }
+    }
   }
   return result();
 }
