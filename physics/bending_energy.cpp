@@ -22,6 +22,16 @@ T angle_from_edges(const V& a, const V& b, const V& c) {
   return atan2(y, dot(n1, n2));
 }
 
+// Scatters a gradient in (a, b, c) = (x1−x0, x2−x0, x3−x0) onto the hinge's vertices.
+template <class El>
+void add_edge_gradient(const El& el, const Eigen::Matrix<double, 9, 1>& ge, Eigen::VectorXd& g) {
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 gk = ge.segment<3>(3 * k);
+    g.segment<3>(3 * el.v[k + 1]) += gk;
+    g.segment<3>(3 * el.v[0]) -= gk;
+  }
+}
+
 }  // namespace
 
 double dihedral_angle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3) {
@@ -71,6 +81,22 @@ double BendingEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
       energy += el.weight * d * d;
       continue;
     }
+    if (!H) {
+      // Gradient only: a first-order jet is an order of magnitude cheaper.
+      using J1 = Jet2<9, false>;
+      using JV1 = std::array<J1, 3>;
+      JV1 ja, jb, jc;
+      for (int k = 0; k < 3; ++k) {
+        ja[k] = J1::variable(a[k], k);
+        jb[k] = J1::variable(b[k], 3 + k);
+        jc[k] = J1::variable(c[k], 6 + k);
+      }
+      const J1 theta = angle_from_edges<J1, JV1>(ja, jb, jc);
+      const double d = theta.v - el.rest_angle;
+      energy += el.weight * d * d;
+      add_edge_gradient(el, 2.0 * el.weight * d * theta.g, *g);
+      continue;
+    }
     JV ja, jb, jc;
     for (int k = 0; k < 3; ++k) {
       ja[k] = J::variable(a[k], k);
@@ -80,15 +106,7 @@ double BendingEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
     const J theta = angle_from_edges<J, JV>(ja, jb, jc);
     const double d = theta.v - el.rest_angle;
     energy += el.weight * d * d;
-    // Gradient and Hessian in (a, b, c); x0 enters as −(a + b + c) directions.
-    const Eigen::Matrix<double, 9, 1> ge = 2.0 * el.weight * d * theta.g;
-    if (g) {
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 gk = ge.segment<3>(3 * k);
-        g->segment<3>(3 * el.v[k + 1]) += gk;
-        g->segment<3>(3 * el.v[0]) -= gk;
-      }
-    }
+    if (g) add_edge_gradient(el, 2.0 * el.weight * d * theta.g, *g);
     if (H) {
       Eigen::Matrix<double, 9, 9> he =
           2.0 * el.weight * (theta.g * theta.g.transpose() + d * theta.h);

@@ -173,7 +173,10 @@ void BodyMesh::compute_normals() {
       const double angle = denom > 0 ? std::acos(std::clamp(e1.dot(e2) / denom, -1.0, 1.0)) : 0;
       vertex_normals_[t[k]] += angle * face_normals_[f];
       const int i = t[k], j = t[(k + 1) % 3];
-      edge_sum[{std::min(i, j), std::max(i, j)}] += face_normals_[f];
+      // emplace: Eigen vectors are not zero-initialised by default construction.
+      auto it = edge_sum.emplace(std::make_pair(std::min(i, j), std::max(i, j)),
+                                 Eigen::Vector3d::Zero()).first;
+      it->second += face_normals_[f];
     }
   }
   for (auto& n : vertex_normals_)

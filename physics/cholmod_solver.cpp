@@ -15,11 +15,17 @@ struct CholmodSolver::State {
   cholmod_factor* l = nullptr;
 };
 
-CholmodSolver::CholmodSolver(const SparseHessian& pattern) : s_(std::make_unique<State>()) {
+CholmodSolver::CholmodSolver(const SparseHessian& pattern, CholeskyKind kind)
+    : s_(std::make_unique<State>()) {
   cholmod_start(&s_->common);
   s_->common.quick_return_if_not_posdef = 1;
   s_->common.print = 0;
   s_->common.error_handler = nullptr;
+  s_->common.nmethods = 1;
+  s_->common.method[0].ordering = CHOLMOD_AMD;
+  s_->common.postorder = 1;
+  if (kind == CholeskyKind::simplicial) s_->common.supernodal = CHOLMOD_SIMPLICIAL;
+  if (kind == CholeskyKind::supernodal) s_->common.supernodal = CHOLMOD_SUPERNODAL;
   const int n = pattern.rows();
   const auto& cols = pattern.column_starts();
   const auto& rows = pattern.row_indices();

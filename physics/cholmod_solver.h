@@ -8,9 +8,14 @@
 
 namespace weft::physics {
 
+enum class CholeskyKind { automatic, simplicial, supernodal };
+
 class CholmodSolver {
  public:
-  explicit CholmodSolver(const SparseHessian& pattern);
+  // The ordering is AMD only: deterministic (METIS's random tie-breaking made batch runs
+  // differ from sequential ones) and as good on these 2D-manifold stencils.
+  explicit CholmodSolver(const SparseHessian& pattern,
+                         CholeskyKind kind = CholeskyKind::automatic);
   ~CholmodSolver();
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;

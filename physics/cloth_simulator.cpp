@@ -27,6 +27,7 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
   inertia_ = std::make_unique<InertiaEnergy>(mesh_.mass, settings_.time_step);
   gravity_ = std::make_unique<GravityEnergy>(mesh_.mass, settings_.gravity);
   membrane_ = std::make_unique<MembraneEnergy>(mesh_, settings_.material);
+  membrane_->set_hessian_projection(settings_.project_membrane_hessian);
   bending_ = std::make_unique<BendingEnergy>(mesh_, settings_.material);
   pins_ = std::make_unique<PinEnergy>(std::vector<int>{}, std::vector<Vec3>{},
                                       settings_.pin_stiffness);

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "graph/error.h"
 
@@ -31,7 +33,7 @@ NewtonSolver::NewtonSolver(int num_vertices, std::vector<Energy*> energies, Newt
   std::vector<std::array<int, 2>> pairs;
   for (const Energy* e : energies_) e->add_pattern(pairs);
   hessian_ = SparseHessian(n_, pairs);
-  cholmod_ = std::make_unique<CholmodSolver>(hessian_);
+  cholmod_ = std::make_unique<CholmodSolver>(hessian_, options_.cholesky);
 }
 
 double NewtonSolver::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
@@ -168,6 +170,9 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
       }
     }
     if (!accepted) return finish(StepStatus::line_search_failed);
+    if (std::getenv("WEFT_NEWTON_TRACE"))
+      std::fprintf(stderr, "it %d E %.12g |g| %.3e |d| %.3e delta %.2e\n", it, e,
+                   g.lpNorm<Eigen::Infinity>(), d.lpNorm<Eigen::Infinity>(), delta_);
     const double e_new = evaluate(x_new, &g_new, nullptr, &report.energy_ms);
     if (!std::isfinite(e_new) || !g_new.allFinite()) return finish(StepStatus::non_finite);
     x.swap(x_new);

@@ -29,6 +29,7 @@ struct NewtonOptions {
   double armijo = 1e-4;        // sufficient-decrease constant
   int max_backtracks = 40;
   LinearSolverKind linear_solver = LinearSolverKind::direct;
+  CholeskyKind cholesky = CholeskyKind::automatic;  // CHOLMOD's choice by flop count
   int cg_max_iterations = 25;
   double cg_relative_tolerance = 1e-4;  // of the residual relative to ‖∇E‖
 };

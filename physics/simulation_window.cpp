@@ -1,0 +1,37 @@
+#include "physics/simulation_window.h"
+
+#include <tbb/parallel_for.h>
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+std::vector<StepResult> simulate_window(ClothSimulator& sim, const SimulationWindow& w) {
+  WEFT_CHECK(w.frames >= 1, "simulation window: frames must be >= 1, got ", w.frames);
+  WEFT_CHECK(w.body.empty() || static_cast<int>(w.body.size()) == w.frames + 1,
+             "simulation window: ", w.body.size(), " body frames given, expected ", w.frames + 1,
+             " (the start frame and each simulated frame)");
+  std::vector<StepResult> results;
+  results.reserve(w.frames);
+  Positions x2 = w.x_prev2, x1 = w.x_prev;
+  for (int f = 0; f < w.frames; ++f) {
+    StepResult r = w.body.empty() ? sim.step(x2, x1)
+                                  : sim.step(x2, x1, &w.body[f], &w.body[f + 1]);
+    x2 = std::move(x1);
+    x1 = r.x;
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+std::vector<std::vector<StepResult>> simulate_windows(const SimulatorFactory& make_simulator,
+                                                      const std::vector<SimulationWindow>& windows) {
+  std::vector<std::vector<StepResult>> results(windows.size());
+  tbb::parallel_for(size_t{0}, windows.size(), [&](size_t i) {
+    std::unique_ptr<ClothSimulator> sim = make_simulator();
+    results[i] = simulate_window(*sim, windows[i]);
+  });
+  return results;
+}
+
+}  // namespace weft::physics

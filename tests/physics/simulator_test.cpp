@@ -1,0 +1,198 @@
+// Laws the time stepper must obey: exact free fall, static equilibrium, no penetration,
+// monotone line search, robustness to bad starts, batch = sequential.
+#include <gtest/gtest.h>
+
+#include "physics/cloth_metrics.h"
+#include "physics/cloth_simulator.h"
+#include "physics/simulation_window.h"
+#include "tests/physics/physics_test_util.h"
+
+namespace weft::physics {
+namespace {
+
+SimulationSettings settings(double h) {
+  SimulationSettings s;
+  s.time_step = h;
+  s.material.density = 0.2;
+  s.material.youngs_modulus = 5e5;
+  s.material.poisson_ratio = 0.3;
+  s.material.bending_stiffness = 1e-5;
+  s.material.thickness = 1e-3;
+  s.newton.max_iterations = 50;
+  s.newton.tolerance = 1e-7;
+  return s;
+}
+
+TEST(Simulator, FreeFallIsExactInOneIteration) {
+  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.4, 0.4, 6, 6, "xz", 0.2);
+  const double h = 0.02;
+  ClothSimulator sim(mesh, settings(h));
+  const Vec3 v0(0.3, 1.0, -0.2);
+  Positions x_prev2 = mesh.rest, x_prev = mesh.rest;
+  for (int i = 0; i < mesh.num_vertices(); ++i) x_prev.segment<3>(3 * i) += h * v0;
+  const StepResult r = sim.step(x_prev2, x_prev);
+  EXPECT_EQ(r.status, StepStatus::converged);
+  EXPECT_EQ(r.newton_iterations, 1);
+  for (int i = 0; i < mesh.num_vertices(); ++i) {
+    const Vec3 expected = x_prev.segment<3>(3 * i) + h * v0 + h * h * Vec3(0, -9.81, 0);
+    EXPECT_LT((r.x.segment<3>(3 * i) - expected).norm(), 1e-10);
+  }
+}
+
+TEST(Simulator, HangingClothSettlesToEquilibrium) {
+  // Long time steps: implicit Euler's numerical damping settles the swing in few frames.
+  const int n = 8;
+  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, n, n, "xz", 0.2);
+  const double h = 0.25;
+  ClothSimulator sim(mesh, settings(h));
+  sim.set_pins({0, n - 1});
+  Positions x2 = mesh.rest, x1 = mesh.rest;
+  StepResult r;
+  for (int f = 0; f < 80; ++f) {
+    r = sim.step(x2, x1);
+    ASSERT_NE(r.status, StepStatus::non_finite);
+    x2 = x1;
+    x1 = r.x;
+  }
+  r = sim.step(x2, x1);
+  EXPECT_EQ(r.status, StepStatus::converged);
+  FrameMetrics m;
+  measure_out_of_balance(sim, x2, x1, r.x, h, m);
+  const double weight = mesh.mass.maxCoeff() * 9.81;
+  // Static: the velocity and the out-of-balance force vanish relative to the weight...
+  EXPECT_LT(((r.x - x1) / h).lpNorm<Eigen::Infinity>(), 1e-4);
+  EXPECT_LT(m.oob_force_max_rel, 1e-3);
+  // ...and so do the forces alone (no inertia): a static equilibrium.
+  EXPECT_LT(sim.total_force(r.x).lpNorm<Eigen::Infinity>(), 1e-3 * weight);
+  // It hangs: the free edge fell well below the pinned one.
+  EXPECT_LT(r.x[3 * (n * n - 1) + 1], 0.7);
+}
+
+TEST(Simulator, ClothDroppedOnSphereNeverPenetrates) {
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.5, 0.7, -0.5), 1.0, 1.0, 12, 12, "xz", 0.2);
+  SimulationSettings s = settings(1.0 / 60);
+  s.collision_thickness = 0.01;
+  ClothSimulator sim(mesh, s);
+  sim.set_spheres({{Vec3(0, 0.3, 0), 0.3}});
+  Positions x2 = mesh.rest, x1 = mesh.rest;
+  double min_d = 1e9;
+  for (int f = 0; f < 45; ++f) {
+    const StepResult r = sim.step(x2, x1);
+    ASSERT_NE(r.status, StepStatus::non_finite);
+    FrameMetrics m;
+    measure_penetration(sim, r.x, m);
+    min_d = std::min(min_d, m.min_signed_distance);
+    x2 = x1;
+    x1 = r.x;
+  }
+  // It reached the sphere (the band is active) but never went through it.
+  EXPECT_LT(min_d, s.collision_thickness);
+  EXPECT_GT(min_d, 0.0);
+}
+
+TEST(Simulator, AcceptedStepsNeverIncreaseTheEnergy) {
+  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, 8, 8, "xz", 0.2);
+  ClothSimulator sim(mesh, settings(1.0 / 30));
+  sim.set_spheres({{Vec3(0.25, 0.9, 0.25), 0.2}});
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 0.05);
+  Positions x = 1.5 * mesh.rest;
+  for (int i = 0; i < x.size(); ++i) x[i] += noise(rng);
+  Positions v = Positions::Zero(x.size());
+  const NewtonReport r = sim.advance(x, v, 1.0 / 30);
+  ASSERT_GE(r.accepted_energies.size(), 3u);
+  for (size_t k = 1; k < r.accepted_energies.size(); ++k)
+    EXPECT_LE(r.accepted_energies[k], r.accepted_energies[k - 1]);
+  EXPECT_EQ(r.status, StepStatus::converged);
+}
+
+TEST(Simulator, BadStartRecoversOrReportsWithoutNaN) {
+  const int n = 14;
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.5, 0.5, -0.5), 1.0, 1.0, n, n, "xz", 0.2);
+  SimulationSettings s = settings(1.0 / 30);
+  s.collision_thickness = 0.01;
+  ClothSimulator sim(mesh, s);
+  sim.add_body(testing::uv_sphere(Vec3(0, 0.45, 0), 0.3));
+  // Stretched to twice its size, crumpled and pushed through the body.
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0, 0.1);
+  Positions x = mesh.rest;
+  for (int i = 0; i < mesh.num_vertices(); ++i) {
+    x.segment<3>(3 * i) = 2.0 * (x.segment<3>(3 * i) - Vec3(0, 0.5, 0)) + Vec3(0, 0.45, 0);
+    for (int k = 0; k < 3; ++k) x[3 * i + k] += noise(rng);
+  }
+  FrameMetrics before;
+  measure_penetration(sim, x, before);
+  ASSERT_GT(before.penetrating_vertices, 8);
+  Positions x2 = x, x1 = x;
+  StepResult r;
+  for (int f = 0; f < 20; ++f) {
+    r = sim.step(x2, x1);
+    ASSERT_TRUE(r.x.allFinite()) << "frame " << f;
+    x2 = x1;
+    x1 = r.x;
+  }
+  FrameMetrics after;
+  measure_penetration(sim, r.x, after);
+  std::printf("bad start: status %s, penetrating %d -> %d vertices, max depth %.4f -> %.4f m\n",
+              to_string(r.status), before.penetrating_vertices, after.penetrating_vertices,
+              before.penetration_max, after.penetration_max);
+  EXPECT_NE(r.status, StepStatus::non_finite);
+  EXPECT_LT(after.penetrating_vertices, before.penetrating_vertices / 4);
+  EXPECT_LT(after.penetration_max, before.penetration_max);
+}
+
+TEST(Simulator, NonFiniteInputIsReportedAndNeverReturned) {
+  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.4, 0.4, 5, 5, "xz", 0.2);
+  ClothSimulator sim(mesh, settings(0.01));
+  Positions bad = mesh.rest;
+  bad[4] = std::numeric_limits<double>::quiet_NaN();
+  const StepResult r = sim.step(mesh.rest, bad);
+  EXPECT_EQ(r.status, StepStatus::non_finite);
+  EXPECT_TRUE(r.x.allFinite());
+  Positions x = bad, v = Positions::Zero(bad.size());
+  x[4] = 0;  // finite state, infinite velocity
+  v[7] = std::numeric_limits<double>::infinity();
+  sim.advance(x, v, 0.01);
+  EXPECT_TRUE(x.allFinite());
+}
+
+TEST(Simulator, BatchEqualsSequential) {
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.3, 0.6, -0.3), 0.6, 0.6, 8, 8, "xz", 0.2);
+  const BodyMesh body = testing::uv_sphere(Vec3(0, 0.3, 0), 0.25, 8, 16);
+  auto make = [&]() {
+    auto sim = std::make_unique<ClothSimulator>(mesh, settings(1.0 / 30));
+    sim->add_body(body);
+    return sim;
+  };
+  std::vector<SimulationWindow> windows;
+  for (int w = 0; w < 6; ++w) {
+    SimulationWindow win;
+    win.x_prev2 = mesh.rest;
+    win.x_prev = mesh.rest;
+    for (int i = 0; i < mesh.num_vertices(); ++i) win.x_prev[3 * i + 1] -= 0.002 * w;
+    win.frames = 4;
+    for (int f = 0; f <= win.frames; ++f) {
+      Eigen::MatrixX3d v = body.vertices();
+      v.col(0).array() += 0.01 * f * (w % 3);
+      win.body.push_back(v);
+    }
+    windows.push_back(win);
+  }
+  const auto batch = simulate_windows(make, windows);
+  ASSERT_EQ(batch.size(), windows.size());
+  for (size_t w = 0; w < windows.size(); ++w) {
+    auto sim = make();
+    const auto seq = simulate_window(*sim, windows[w]);
+    ASSERT_EQ(seq.size(), batch[w].size());
+    for (size_t f = 0; f < seq.size(); ++f) {
+      EXPECT_EQ(seq[f].status, batch[w][f].status);
+      EXPECT_EQ((seq[f].x - batch[w][f].x).lpNorm<Eigen::Infinity>(), 0.0);
+    }
+  }
+  // Different windows really are different (the comparison can fail).
+  EXPECT_GT((batch[0].back().x - batch[5].back().x).norm(), 1e-6);
+}
+
+}  // namespace
+}  // namespace weft::physics
