@@ -2,6 +2,8 @@
 // Differentiable geometry ops of the deformation layer (see ../shared/DESIGN.md):
 // rotations, embedded deformation, skinning and camera projection. All are batched over
 // frames B, float32 or float64, with hand-written backward passes.
+#include <vector>
+
 #include "graph/tensor.h"
 
 namespace weft::ops {
@@ -35,6 +37,23 @@ Tensor dual_quaternion_skinning(const Tensor& vertices, const Tensor& dual_quate
 // Rigid transforms [..., 3, 4] (rotation | translation) → unit dual quaternions [..., 8]
 // (w ≥ 0 on the real part), differentiable.
 Tensor rigid_to_dual_quaternion(const Tensor& transforms);
+
+// A kinematic chain of 1-dof joints, parents before children (Skeletool semantics):
+// L_j = T(offset_j) · M_j(p_j), M_j a rotation by p_j radians about axis_j (revolute) or
+// a translation by p_j along it (prismatic); G_j = G_parent · L_j. Offsets are already
+// multiplied by the joint's scale, in the character's units.
+struct KinematicChain {
+  std::vector<int64_t> parents;     // J, −1 for roots
+  std::vector<int64_t> prismatic;   // J, 1 for prismatic joints, 0 for revolute
+  std::vector<double> offsets;      // J×3
+  std::vector<double> axes;         // J×3, unit length
+  std::vector<double> bind_inverse; // optional J×12 (3×4 row-major): output G_j · B_j⁻¹
+};
+
+// Joint parameters [B, J] → global joint transforms [B, J, 3, 4] (rotation | translation),
+// times the inverse bind transforms when the chain has them (skinning transforms).
+// Gradient to the joint parameters.
+Tensor forward_kinematics(const Tensor& joint_parameters, const KinematicChain& chain);
 
 // A calibrated pinhole camera: world → camera by x_c = R X + t (metres or the data's
 // units), then OpenCV's distortion model (k1, k2, p1, p2, k3) and intrinsics → pixels.

@@ -158,3 +158,43 @@ WEFT_GRADCHECK_CASES(project_points) {
 }
 
 }  // namespace weft::testing
+
+namespace weft::testing {
+
+// A branching 5-joint chain: a prismatic root, revolute joints with skewed axes, two
+// children of joint 2; with and without inverse bind transforms.
+static ops::KinematicChain test_chain(bool with_bind) {
+  ops::KinematicChain c;
+  c.parents = {-1, 0, 1, 2, 2};
+  c.prismatic = {1, 0, 0, 0, 1};
+  c.offsets = {0.1, 0.2, 0.0, 0.0, 1.0, 0.0, 0.3, 0.5, -0.2, 0.0, 0.4, 0.1, -0.2, 0.1, 0.3};
+  const double s = 1 / std::sqrt(3.0);
+  c.axes = {0, 1, 0, 1, 0, 0, s, s, s, 0, 0, 1, s, -s, s};
+  if (with_bind) {
+    Generator g(5);
+    for (int j = 0; j < 5; ++j) {
+      Tensor R = ops::euler_to_rotation(Tensor::rand({3}, g, DType::F64, -1, 1));
+      for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) c.bind_inverse.push_back(R.at({r, k}));
+        c.bind_inverse.push_back(g.uniform(-1, 1));
+      }
+    }
+  }
+  return c;
+}
+
+WEFT_GRADCHECK_CASES(forward_kinematics) {
+  GradcheckCase c = uniform_case("forward_kinematics", "branching chain, B=2", {{2, 5}}, {}, -2, 2);
+  c.function = [](const std::vector<Tensor>& in) {
+    return ops::forward_kinematics(in[0], test_chain(false));
+  };
+  GradcheckCase bind = c;
+  bind.name = "branching chain with inverse bind transforms, B=1";
+  bind.make_inputs = [](Generator& g) { return std::vector<Tensor>{uniform64(g, {1, 5}, -2, 2)}; };
+  bind.function = [](const std::vector<Tensor>& in) {
+    return ops::forward_kinematics(in[0], test_chain(true));
+  };
+  return {c, bind};
+}
+
+}  // namespace weft::testing
