@@ -11,6 +11,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -35,24 +37,52 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-template <class F>
-double median_seconds(int repeats, F f) {
-  f();  // warm-up: buffers, page faults
-  std::vector<double> t;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = Clock::now();
-    f();
-    t.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+// CPU seconds used so far by the OpenMP team (the threads Eigen and the conv kernels
+// run on), each thread reading its own clock: the process clock only catches up with
+// the other threads' time at scheduler ticks, too coarse for runs of a few ms.
+double cpu_seconds(int threads) {
+  double total = 0;
+#pragma omp parallel num_threads(threads) reduction(+ : total)
+  {
+    timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    total += t.tv_sec + 1e-9 * t.tv_nsec;
   }
-  return median(t);
+  return total;
 }
 
-double sgemm_gflops(int repeats) {
+struct Timing {
+  double wall, cpu;  // seconds, medians; cpu already divided by the thread count
+};
+
+template <class F>
+Timing median_time(int repeats, int threads, F f) {
+  f();  // warm-up: scratch buffers, allocator, page faults
+  f();
+  std::vector<double> wall, cpu;
+  for (int r = 0; r < repeats; ++r) {
+    const double c0 = cpu_seconds(threads);
+    const auto t0 = Clock::now();
+    f();
+    wall.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+    cpu.push_back((cpu_seconds(threads) - c0) / threads);
+  }
+  return {median(wall), median(cpu)};
+}
+
+Timing sgemm_time(int repeats, int threads) {
   const int n = 1024;
   Eigen::MatrixXf a = Eigen::MatrixXf::Random(n, n), b = Eigen::MatrixXf::Random(n, n), c(n, n);
-  const double s = median_seconds(repeats, [&] { c.noalias() = a * b; });
+  const Timing t = median_time(repeats, threads, [&] { c.noalias() = a * b; });
   if (c(0, 0) == 12345.f) std::puts("");  // keep the product alive
-  return 2.0 * n * n * n / s * 1e-9;
+  return t;
+}
+
+std::string loadavg() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a + " " + b + " " + c;
 }
 
 }  // namespace
@@ -100,23 +130,25 @@ int main(int argc, char** argv) {
       {"l4 3x3 512", 512, 512, 3, 1, 1, s4, 2},
   };
 
-  const double gemm = sgemm_gflops(repeats);
-  std::printf("conv2d, float32, batch %ld, input 3x%ldx%ld, %d threads, median of %d\n",
-              static_cast<long>(batch), static_cast<long>(size), static_cast<long>(size),
-              threads, repeats);
-  std::printf("Eigen sgemm 1024^3: %.1f GFLOP/s\n\n", gemm);
-  std::printf("%-22s %4s %9s %8s %8s %5s %8s %8s %5s\n", "layer", "n", "out", "fwd ms",
-              "GFLOP/s", "%gemm", "f+b ms", "GFLOP/s", "%gemm");
+  const std::string load_before = loadavg();
+  const double gemm_flops = 2.0 * 1024 * 1024 * 1024;
+  const Timing gemm_before = sgemm_time(repeats, threads);
 
   Generator gen(1);
-  double net_flops = 0, net_fwd = 0, net_fb = 0;
+  struct Row {
+    const Layer* layer;
+    int64_t out;
+    double flops;
+    Timing fwd, fb;
+  };
+  std::vector<Row> rows;
   for (const Layer& L : layers) {
     const int64_t out = (L.in + 2 * L.pad - L.k) / L.stride + 1;
     const double flops = 2.0 * batch * L.O * L.C * L.k * L.k * out * out;
     Tensor x = Tensor::randn({batch, L.C, L.in, L.in}, gen);
     Tensor w = Tensor::randn({L.O, L.C, L.k, L.k}, gen, DType::F32, 0.0, 0.05);
     const ops::Conv2dOptions o{L.stride, L.stride, L.pad, L.pad, 1, 1};
-    const double fwd = median_seconds(repeats, [&] {
+    const Timing fwd = median_time(repeats, threads, [&] {
       NoGradGuard no_grad;
       Tensor y = ops::conv2d(x, w, Tensor(), o);
     });
@@ -124,24 +156,52 @@ int main(int argc, char** argv) {
     xg.set_requires_grad();
     wg.set_requires_grad();
     const Tensor gy = Tensor::randn({batch, L.O, out, out}, gen);
-    const double fb = median_seconds(repeats, [&] {
+    const Timing fb = median_time(repeats, threads, [&] {
       xg.zero_grad();
       wg.zero_grad();
       Tensor y = ops::conv2d(xg, wg, Tensor(), o);
       y.backward(gy);
     });
-    const double gf = flops / fwd * 1e-9, gfb = 3 * flops / fb * 1e-9;
-    std::printf("%-22s %4d %9s %8.2f %8.1f %4.0f%% %8.2f %8.1f %4.0f%%\n", L.name, L.count,
-                (std::to_string(L.O) + "x" + std::to_string(out)).c_str(), fwd * 1e3, gf,
-                100 * gf / gemm, fb * 1e3, gfb, 100 * gfb / gemm);
-    net_flops += L.count * flops;
-    net_fwd += L.count * fwd;
-    net_fb += L.count * fb;
+    rows.push_back({&L, out, flops, fwd, fb});
   }
-  std::printf("\nall 53 convs of ResNet-50 (weighted by n): forward %.1f ms, %.1f GFLOP/s "
-              "(%.0f%% of sgemm); forward+backward %.1f ms, %.1f GFLOP/s (%.0f%%)\n",
-              net_fwd * 1e3, net_flops / net_fwd * 1e-9, 100 * net_flops / net_fwd * 1e-9 / gemm,
-              net_fb * 1e3, 3 * net_flops / net_fb * 1e-9,
-              100 * 3 * net_flops / net_fb * 1e-9 / gemm);
+  const Timing gemm_after = sgemm_time(repeats, threads);
+  const double gemm_wall = gemm_flops / (0.5 * (gemm_before.wall + gemm_after.wall)) * 1e-9;
+  const double gemm_cpu = gemm_flops / (0.5 * (gemm_before.cpu + gemm_after.cpu)) * 1e-9;
+
+  std::printf("conv2d, float32, batch %ld, input 3x%ldx%ld, %d threads, median of %d; "
+              "load average %s (before) %s (after)\n",
+              static_cast<long>(batch), static_cast<long>(size), static_cast<long>(size),
+              threads, repeats, load_before.c_str(), loadavg().c_str());
+  std::printf("Eigen sgemm 1024^3: wall %.1f GFLOP/s (%.1f before, %.1f after), cpu %.1f GFLOP/s\n\n",
+              gemm_wall, gemm_flops / gemm_before.wall * 1e-9,
+              gemm_flops / gemm_after.wall * 1e-9, gemm_cpu);
+  std::printf("%-21s %2s %8s | %7s %7s %4s %7s %4s | %7s %7s %4s %7s %4s\n", "layer", "n", "out",
+              "fwd ms", "GFLOP/s", "%", "cpu", "%", "f+b ms", "GFLOP/s", "%", "cpu", "%");
+  double net_flops = 0, net_fwd = 0, net_fb = 0, net_fwd_cpu = 0, net_fb_cpu = 0;
+  for (const Row& r : rows) {
+    const double f = r.flops * 1e-9;
+    std::printf("%-21s %2d %8s | %7.2f %7.1f %3.0f%% %7.1f %3.0f%% | %7.2f %7.1f %3.0f%% %7.1f "
+                "%3.0f%%\n",
+                r.layer->name, r.layer->count,
+                (std::to_string(r.layer->O) + "x" + std::to_string(r.out)).c_str(),
+                r.fwd.wall * 1e3, f / r.fwd.wall, 100 * f / r.fwd.wall / gemm_wall,
+                f / r.fwd.cpu, 100 * f / r.fwd.cpu / gemm_cpu, r.fb.wall * 1e3,
+                3 * f / r.fb.wall, 100 * 3 * f / r.fb.wall / gemm_wall, 3 * f / r.fb.cpu,
+                100 * 3 * f / r.fb.cpu / gemm_cpu);
+    net_flops += r.layer->count * f;
+    net_fwd += r.layer->count * r.fwd.wall;
+    net_fb += r.layer->count * r.fb.wall;
+    net_fwd_cpu += r.layer->count * r.fwd.cpu;
+    net_fb_cpu += r.layer->count * r.fb.cpu;
+  }
+  std::printf("\nall 53 convs of ResNet-50 (each shape weighted by n):\n"
+              "  forward          %7.1f ms  %6.1f GFLOP/s (%3.0f%% of sgemm); cpu %6.1f GFLOP/s "
+              "(%3.0f%%)\n"
+              "  forward+backward %7.1f ms  %6.1f GFLOP/s (%3.0f%% of sgemm); cpu %6.1f GFLOP/s "
+              "(%3.0f%%)\n",
+              net_fwd * 1e3, net_flops / net_fwd, 100 * net_flops / net_fwd / gemm_wall,
+              net_flops / net_fwd_cpu, 100 * net_flops / net_fwd_cpu / gemm_cpu, net_fb * 1e3,
+              3 * net_flops / net_fb, 100 * 3 * net_flops / net_fb / gemm_wall,
+              3 * net_flops / net_fb_cpu, 100 * 3 * net_flops / net_fb_cpu / gemm_cpu);
   return 0;
 }

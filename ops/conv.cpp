@@ -7,11 +7,12 @@
 //   dcol  [K, P]   = Wᵀ · dy_n,  dx_n = col2im(dcol)   (1×1 fast path: dx_n = Wᵀ · dy_n)
 //
 // Threading (see conv_plan): OpenMP over groups of images, each GEMM single-threaded,
-// when there are at least as many images as threads — at batch 8 this beat running the
-// images in turn through Eigen's threaded GEMM on every ResNet-50 shape we timed (see
-// docs/BENCHMARKS.md) — else the images in turn with Eigen's threaded GEMM. Each thread
-// reuses its column and staging buffers across calls (thread_local): the hot loop does
-// not allocate.
+// when there are at least as many images as threads; else the images in turn with
+// Eigen's threaded GEMM. At batch 8 on 2 threads, interleaved A/B runs on the shared
+// machine had the batch-parallel form ahead on all nine ResNet-50 shapes tried, forward
+// and backward (Eigen's threaded GEMM synchronises once per panel, and each sync costs
+// a scheduler slice when other jobs hold a core). Each thread reuses its column and
+// staging buffers across calls (thread_local): the hot loop does not allocate.
 #include <omp.h>
 
 #include <Eigen/Core>
@@ -174,8 +175,8 @@ void unpack_image(const T* src, int64_t rows, int64_t P, int64_t ld, T* dst) {
 }
 
 // Reusable scratch per thread, dtype and use (0: columns, 1: output/gradient staging,
-// 2: weight-gradient accumulator);
-// grows to the largest size asked for and is kept across calls.
+// 2: weight-gradient accumulator); grows to the largest size asked for and is kept
+// across calls.
 template <class T, int Use>
 T* scratch(int64_t elements) {
   thread_local std::vector<T> buffer;
@@ -189,8 +190,9 @@ T* scratch(int64_t elements) {
 
 // How the batch is cut: images are taken in groups of G whose columns share one GEMM
 // (G·P columns), so that the small late-stage images (P = Ho·Wo = 16..64 at 128×128
-// input) still give the GEMM a wide right-hand side: a single-threaded GEMM reached
-// ~65 (P = 16, one image) vs ~95 GFLOP/s (64+ columns) on this machine. With at least as
+// input) still give the GEMM a wide right-hand side: on this machine the 4×4-output
+// ResNet-50 layers ran at ~65–85 GFLOP/s per thread one image at a time and ~95–110
+// with 64+ columns per GEMM (single thread, CPU time). With at least as
 // many images as threads the groups run in parallel, each GEMM single-threaded, and G is
 // capped so every thread gets the same number of groups; with fewer images than threads
 // (e.g. one image at inference) the images run in turn and Eigen threads each GEMM.
