@@ -68,4 +68,16 @@ struct PinholeCamera {
 // Points at or behind the camera plane (z ≤ 1e-9) are an error.
 Tensor project_points(const Tensor& points, const PinholeCamera& camera);
 
+// Bilinear sampling of images [B,H,W] at points [B,N,2] (x = column, y = row, in pixels,
+// pixel centres at integers); points outside are clamped to the border. → [B,N].
+// Gradients to the image and the points.
+Tensor image_sample_bilinear(const Tensor& image, const Tensor& points);
+
+// As-rigid-as-possible energy of an embedded graph (summed over frames, both directions
+// of each edge): Σ_b Σ_(j,k) w_jk ‖R_j (g_k − g_j) + g_j + t_j − (g_k + t_k)‖².
+// nodes g [K,3], rotations [B,K,3,3], translations [B,K,3], edges int64 [E,2],
+// edge_weights [E] → scalar. Gradients to rotations, translations and nodes.
+Tensor arap_energy(const Tensor& nodes, const Tensor& rotations, const Tensor& translations,
+                   const Tensor& edges, const Tensor& edge_weights);
+
 }  // namespace weft::ops

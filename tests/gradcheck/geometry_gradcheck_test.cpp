@@ -198,3 +198,36 @@ WEFT_GRADCHECK_CASES(forward_kinematics) {
 }
 
 }  // namespace weft::testing
+
+namespace weft::testing {
+
+WEFT_GRADCHECK_CASES(image_sample_bilinear) {
+  GradcheckCase c;
+  c.op = "image_sample_bilinear";
+  c.name = "B=2 5x6 images, interior and clamped points";
+  c.make_inputs = [](Generator& g) {
+    Tensor pts = uniform64(g, {2, 4, 2}, 0.3, 3.7);
+    // keep points off the pixel grid lines (kinks of bilinear interpolation)
+    double* p = pts.data<double>();
+    for (int64_t i = 0; i < pts.numel(); ++i) p[i] = std::floor(p[i]) + 0.2 + 0.6 * (p[i] - std::floor(p[i]));
+    p[0] = -1.3;  // clamped in x: gradient in x is zero there
+    p[3] = 7.6;   // clamped in y (H = 5)
+    return std::vector<Tensor>{uniform64(g, {2, 5, 6}), pts};
+  };
+  return {c};
+}
+
+WEFT_GRADCHECK_CASES(arap_energy) {
+  GradcheckCase c;
+  c.op = "arap_energy";
+  c.name = "K=4 nodes, 4 edges, B=2";
+  c.make_inputs = [](Generator& g) {
+    return std::vector<Tensor>{uniform64(g, {4, 3}), uniform64(g, {2, 4, 3, 3}),
+                               uniform64(g, {2, 4, 3}),
+                               Tensor::from_indices({4, 2}, {0, 1, 1, 2, 2, 3, 0, 3}),
+                               uniform64(g, {4}, 0.1, 1.0)};
+  };
+  return {c};
+}
+
+}  // namespace weft::testing
