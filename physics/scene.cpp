@@ -1,0 +1,415 @@
+#include "physics/scene.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "graph/error.h"
+
+namespace weft::physics {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Reads one YAML mapping, refusing keys it does not know.
+class Section {
+ public:
+  Section(const YAML::Node& node, std::string file, std::string prefix)
+      : node_(node), file_(std::move(file)), prefix_(std::move(prefix)) {
+    WEFT_CHECK(node_.IsMap(), file_, ": '", prefix_.empty() ? "(top level)" : prefix_,
+               "' must be a mapping");
+  }
+  void allow(std::initializer_list<const char*> keys) {
+    std::set<std::string> ok(keys.begin(), keys.end());
+    for (const auto& kv : node_) {
+      const std::string k = kv.first.as<std::string>();
+      if (!ok.count(k)) {
+        std::string list;
+        for (const auto& o : ok) list += (list.empty() ? "" : ", ") + o;
+        fail(file_, ": unknown key '", key(k), "' (expected one of: ", list, ")");
+      }
+    }
+  }
+  bool has(const char* k) const { return static_cast<bool>(node_[k]); }
+  std::string key(const std::string& k) const { return prefix_.empty() ? k : prefix_ + "." + k; }
+  const std::string& file() const { return file_; }
+  YAML::Node node(const char* k) const { return node_[k]; }
+
+  template <class T>
+  T get(const char* k, const char* expected) const {
+    const YAML::Node n = node_[k];
+    WEFT_CHECK(n, file_, ": missing key '", key(k), "'");
+    return convert<T>(n, key(k), expected);
+  }
+  template <class T>
+  T get_or(const char* k, T fallback, const char* expected) const {
+    return has(k) ? get<T>(k, expected) : fallback;
+  }
+  double number(const char* k) const { return get<double>(k, "a number"); }
+  double number_or(const char* k, double fallback) const {
+    return get_or<double>(k, fallback, "a number");
+  }
+  double positive(const char* k, double fallback) const {
+    const double v = number_or(k, fallback);
+    WEFT_CHECK(std::isfinite(v) && v > 0, file_, ": '", key(k), "' must be > 0, got ", v);
+    return v;
+  }
+  Eigen::VectorXd vector(const char* k, int size) const {
+    const YAML::Node n = node_[k];
+    WEFT_CHECK(n, file_, ": missing key '", key(k), "'");
+    WEFT_CHECK(n.IsSequence() && static_cast<int>(n.size()) == size, file_, ": '", key(k),
+               "' must be a list of ", size, " numbers");
+    Eigen::VectorXd v(size);
+    for (int i = 0; i < size; ++i) v[i] = convert<double>(n[i], key(k), "a number");
+    WEFT_CHECK(v.allFinite(), file_, ": '", key(k), "' must be finite");
+    return v;
+  }
+
+  template <class T>
+  T convert(const YAML::Node& n, const std::string& k, const char* expected) const {
+    try {
+      WEFT_CHECK(n.IsScalar(), file_, ": '", k, "' must be ", expected);
+      return n.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(file_, ": '", k, "' must be ", expected, ", got '", n.Scalar(), "'");
+    }
+  }
+
+ private:
+  YAML::Node node_;
+  std::string file_, prefix_;
+};
+
+std::string resolve(const std::string& scene_file, const std::string& relative) {
+  const fs::path p(relative);
+  return p.is_absolute() ? p.string() : (fs::path(scene_file).parent_path() / p).string();
+}
+
+std::vector<int> read_face_list(const std::string& path, const std::string& scene_file,
+                                const std::string& key) {
+  std::ifstream in(path);
+  WEFT_CHECK(in.good(), scene_file, ": '", key, "': cannot open '", path, "'");
+  std::vector<int> faces;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    line = line.substr(0, line.find('#'));
+    std::istringstream ls(line);
+    std::string tok;
+    while (ls >> tok) {
+      try {
+        size_t used = 0;
+        const int f = std::stoi(tok, &used);
+        WEFT_CHECK(used == tok.size() && f >= 0, path, ":", line_no, ": bad face index '", tok, "'");
+        faces.push_back(f);
+      } catch (const std::logic_error&) {
+        fail(path, ":", line_no, ": bad face index '", tok, "'");
+      }
+    }
+  }
+  return faces;
+}
+
+}  // namespace
+
+std::string sequence_path(const std::string& pattern, int frame) {
+  static const std::regex spec("%(0?[0-9]*)d");
+  std::smatch m;
+  WEFT_CHECK(std::regex_search(pattern, m, spec) &&
+                 std::count(pattern.begin(), pattern.end(), '%') == 1,
+             "mesh sequence pattern '", pattern, "' must contain exactly one %d or %0Nd");
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), ("%" + m[1].str() + "d").c_str(), frame);
+  return m.prefix().str() + buf + m.suffix().str();
+}
+
+Scene load_scene(const std::string& path) {
+  WEFT_CHECK(fs::exists(path), path, ": scene file not found");
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    fail(path, ": invalid YAML: ", e.what());
+  }
+  Scene scene;
+  scene.file = path;
+  Section top(root, path, "");
+  top.allow({"time_step", "frames", "substeps", "gravity", "cloth", "obstacles", "collision",
+             "solver"});
+  SimulationSettings& s = scene.settings;
+  s.time_step = top.positive("time_step", s.time_step);
+  scene.frames = top.get_or<int>("frames", scene.frames, "an integer");
+  WEFT_CHECK(scene.frames >= 1, path, ": 'frames' must be >= 1, got ", scene.frames);
+  s.substeps = top.get_or<int>("substeps", 1, "an integer");
+  WEFT_CHECK(s.substeps >= 1, path, ": 'substeps' must be >= 1, got ", s.substeps);
+  if (top.has("gravity")) s.gravity = top.vector("gravity", 3);
+
+  WEFT_CHECK(top.has("cloth"), path, ": missing key 'cloth'");
+  Section cloth(top.node("cloth"), path, "cloth");
+  cloth.allow({"grid", "mesh", "material", "pins", "pin_stiffness"});
+  if (cloth.has("material")) {
+    Section mat(cloth.node("material"), path, "cloth.material");
+    mat.allow({"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness"});
+    ClothMaterial& m = s.material;
+    m.density = mat.number_or("density", m.density);
+    WEFT_CHECK(m.density > 0, path, ": 'cloth.material.density' must be > 0 kg/m², got ", m.density);
+    m.youngs_modulus = mat.number_or("youngs_modulus", m.youngs_modulus);
+    WEFT_CHECK(m.youngs_modulus >= 0, path, ": 'cloth.material.youngs_modulus' must be >= 0 Pa, got ",
+               m.youngs_modulus);
+    m.poisson_ratio = mat.number_or("poisson_ratio", m.poisson_ratio);
+    WEFT_CHECK(m.poisson_ratio >= 0 && m.poisson_ratio < 0.5, path,
+               ": 'cloth.material.poisson_ratio' must be in [0, 0.5), got ", m.poisson_ratio);
+    m.bending_stiffness = mat.number_or("bending_stiffness", m.bending_stiffness);
+    WEFT_CHECK(m.bending_stiffness >= 0, path,
+               ": 'cloth.material.bending_stiffness' must be >= 0 N·m, got ", m.bending_stiffness);
+    m.thickness = mat.positive("thickness", m.thickness);
+  }
+  s.pin_stiffness = cloth.positive("pin_stiffness", s.pin_stiffness);
+  WEFT_CHECK(cloth.has("grid") != cloth.has("mesh"), path,
+             ": 'cloth' needs exactly one of 'grid' or 'mesh'");
+  if (cloth.has("grid")) {
+    Section grid(cloth.node("grid"), path, "cloth.grid");
+    grid.allow({"size", "resolution", "origin", "plane"});
+    const Eigen::VectorXd size = grid.vector("size", 2);
+    const Eigen::VectorXd res = grid.vector("resolution", 2);
+    WEFT_CHECK(size.minCoeff() > 0, path, ": 'cloth.grid.size' must be positive");
+    WEFT_CHECK(res.minCoeff() >= 2 && res == res.array().round().matrix() && res.maxCoeff() < 5000,
+               path, ": 'cloth.grid.resolution' must be two integers in [2, 5000)");
+    const Eigen::VectorXd origin = grid.has("origin") ? grid.vector("origin", 3) : Eigen::VectorXd::Zero(3);
+    const std::string plane = grid.get_or<std::string>("plane", "xz", "a string");
+    WEFT_CHECK(plane == "xy" || plane == "xz" || plane == "yz", path,
+               ": 'cloth.grid.plane' must be xy, xz or yz, got '", plane, "'");
+    scene.cloth = make_grid_cloth(Vec3(origin), size[0], size[1], static_cast<int>(res[0]),
+                                  static_cast<int>(res[1]), plane.c_str(), s.material.density);
+  } else {
+    const std::string file = resolve(path, cloth.get<std::string>("mesh", "a file path"));
+    WEFT_CHECK(fs::exists(file), path, ": 'cloth.mesh': file not found: ", file);
+    const TriangleMesh m = read_obj(file);
+    Positions rest(3 * m.vertices.rows());
+    for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) rest.segment<3>(3 * i) = m.vertices.row(i).transpose();
+    scene.cloth = make_cloth_mesh(rest, m.faces, s.material.density);
+  }
+  if (cloth.has("pins")) {
+    const YAML::Node pins = cloth.node("pins");
+    WEFT_CHECK(pins.IsSequence(), path, ": 'cloth.pins' must be a list of vertex ids");
+    for (size_t k = 0; k < pins.size(); ++k) {
+      const int id = cloth.convert<int>(pins[k], "cloth.pins", "a list of integer vertex ids");
+      WEFT_CHECK(id >= 0 && id < scene.cloth.num_vertices(), path, ": 'cloth.pins': vertex ", id,
+                 " outside [0, ", scene.cloth.num_vertices(), ")");
+      scene.pins.push_back(id);
+    }
+  }
+
+  if (top.has("obstacles")) {
+    const YAML::Node list = top.node("obstacles");
+    WEFT_CHECK(list.IsSequence(), path, ": 'obstacles' must be a list");
+    int sequences = 0;
+    for (size_t k = 0; k < list.size(); ++k) {
+      const std::string prefix = "obstacles[" + std::to_string(k) + "]";
+      Section o(list[k], path, prefix);
+      o.allow({"sphere", "mesh", "mesh_sequence", "inactive_faces"});
+      SceneObstacle ob;
+      const int kinds = o.has("sphere") + o.has("mesh") + o.has("mesh_sequence");
+      WEFT_CHECK(kinds == 1, path, ": '", prefix, "' needs exactly one of sphere, mesh, mesh_sequence");
+      if (o.has("sphere")) {
+        Section sp(o.node("sphere"), path, prefix + ".sphere");
+        sp.allow({"center", "radius"});
+        ob.kind = SceneObstacle::Kind::sphere;
+        ob.sphere.center = sp.vector("center", 3);
+        ob.sphere.radius = sp.positive("radius", 0);
+        WEFT_CHECK(!o.has("inactive_faces"), path, ": '", prefix, ".inactive_faces' applies to meshes only");
+      } else if (o.has("mesh")) {
+        ob.kind = SceneObstacle::Kind::mesh;
+        ob.path = resolve(path, o.get<std::string>("mesh", "a file path"));
+        WEFT_CHECK(fs::exists(ob.path), path, ": '", prefix, ".mesh': file not found: ", ob.path);
+      } else {
+        ob.kind = SceneObstacle::Kind::mesh_sequence;
+        WEFT_CHECK(++sequences == 1, path, ": '", prefix, "': at most one mesh_sequence per scene");
+        ob.path = resolve(path, o.get<std::string>("mesh_sequence", "a file pattern"));
+        for (int f = 0; f <= scene.frames; ++f) {
+          const std::string p = sequence_path(ob.path, f);
+          WEFT_CHECK(fs::exists(p), path, ": '", prefix, ".mesh_sequence': frame ", f,
+                     " not found: ", p, " (frames 0..", scene.frames, " are needed)");
+        }
+      }
+      if (o.has("inactive_faces"))
+        ob.inactive_faces = read_face_list(
+            resolve(path, o.get<std::string>("inactive_faces", "a file path")), path,
+            prefix + ".inactive_faces");
+      scene.obstacles.push_back(std::move(ob));
+    }
+  }
+  if (top.has("collision")) {
+    Section c(top.node("collision"), path, "collision");
+    c.allow({"thickness", "stiffness"});
+    s.collision_thickness = c.positive("thickness", s.collision_thickness);
+    s.collision_stiffness = c.positive("stiffness", s.collision_stiffness);
+  }
+  if (top.has("solver")) {
+    Section sv(top.node("solver"), path, "solver");
+    sv.allow({"max_iterations", "tolerance", "linear_solver", "cholesky"});
+    s.newton.max_iterations = sv.get_or<int>("max_iterations", s.newton.max_iterations, "an integer");
+    WEFT_CHECK(s.newton.max_iterations >= 1, path, ": 'solver.max_iterations' must be >= 1");
+    s.newton.tolerance = sv.positive("tolerance", s.newton.tolerance);
+    const std::string ls = sv.get_or<std::string>("linear_solver", "direct", "a string");
+    WEFT_CHECK(ls == "direct" || ls == "reused_factor", path,
+               ": 'solver.linear_solver' must be direct or reused_factor, got '", ls, "'");
+    s.newton.linear_solver = ls == "direct" ? LinearSolverKind::direct : LinearSolverKind::reused_factor;
+    const std::string ch = sv.get_or<std::string>("cholesky", "automatic", "a string");
+    WEFT_CHECK(ch == "automatic" || ch == "simplicial" || ch == "supernodal", path,
+               ": 'solver.cholesky' must be automatic, simplicial or supernodal, got '", ch, "'");
+    s.newton.cholesky = ch == "simplicial"   ? CholeskyKind::simplicial
+                        : ch == "supernodal" ? CholeskyKind::supernodal
+                                             : CholeskyKind::automatic;
+  }
+  validate(s);
+  return scene;
+}
+
+namespace {
+
+BodyMesh load_body(const std::string& file, const std::vector<int>& inactive) {
+  TriangleMesh m = read_obj(file);
+  for (int f : inactive)
+    WEFT_CHECK(f < static_cast<int>(m.faces.size()), file, ": inactive face ", f, " outside [0, ",
+               m.faces.size(), ")");
+  return BodyMesh(std::move(m.vertices), std::move(m.faces), inactive);
+}
+
+// JSON has no infinity: a distance with no obstacle to measure against is null.
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+SceneRun run_scene(const Scene& scene, const std::string& out_dir,
+                   const std::function<void(const FrameRecord&)>& progress) {
+  ClothSimulator sim(scene.cloth, scene.settings);
+  sim.set_pins(scene.pins);
+  std::vector<SphereObstacle> spheres;
+  const SceneObstacle* sequence = nullptr;
+  for (const auto& o : scene.obstacles) {
+    if (o.kind == SceneObstacle::Kind::sphere) spheres.push_back(o.sphere);
+    if (o.kind == SceneObstacle::Kind::mesh_sequence) sequence = &o;
+  }
+  sim.set_spheres(spheres);
+  // The moving body goes first: the simulator's step() moves body 0.
+  if (sequence) sim.add_body(load_body(sequence_path(sequence->path, 0), sequence->inactive_faces));
+  for (const auto& o : scene.obstacles)
+    if (o.kind == SceneObstacle::Kind::mesh) sim.add_body(load_body(o.path, o.inactive_faces));
+
+  if (!out_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(out_dir, ec);
+    WEFT_CHECK(!ec && fs::is_directory(out_dir), out_dir, ": cannot create the output directory");
+  }
+  auto obj_path = [&](int f) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "cloth_%04d.obj", f);
+    return (fs::path(out_dir) / name).string();
+  };
+  const auto& tris = scene.cloth.triangles;
+  if (!out_dir.empty()) write_obj(obj_path(0), scene.cloth.rest, tris);
+
+  SceneRun run;
+  const double h = scene.settings.time_step;
+  Positions x2 = scene.cloth.rest, x1 = scene.cloth.rest;
+  Eigen::MatrixX3d body_prev, body_now;
+  if (sequence) body_prev = sim.body(0).vertices();
+  for (int f = 1; f <= scene.frames; ++f) {
+    StepResult r;
+    if (sequence) {
+      const std::string file = sequence_path(sequence->path, f);
+      const TriangleMesh m = read_obj(file);
+      WEFT_CHECK(m.vertices.rows() == body_prev.rows(), file, ": ", m.vertices.rows(),
+                 " vertices, but frame 0 of the sequence has ", body_prev.rows());
+      body_now = m.vertices;
+      r = sim.step(x2, x1, &body_prev, &body_now);
+      body_prev = body_now;
+    } else {
+      r = sim.step(x2, x1);
+    }
+    FrameRecord rec;
+    rec.frame = f;
+    rec.status = r.status;
+    rec.newton_iterations = r.newton_iterations;
+    rec.gradient_norm = r.gradient_norm;
+    rec.energy = r.energy;
+    rec.step_ms = r.step_ms;
+    rec.metrics = frame_metrics(sim, x2, x1, r.x, h);
+    if (!out_dir.empty()) write_obj(obj_path(f), r.x, tris);
+    x2 = std::move(x1);
+    x1 = std::move(r.x);
+    if (progress) progress(rec);
+    run.frames.push_back(rec);
+  }
+
+  // metrics.json
+  nlohmann::json frames = nlohmann::json::array();
+  std::vector<double> ms;
+  int converged = 0, iterations = 0;
+  double pen_max = 0, min_d = std::numeric_limits<double>::infinity(), oob_mean = 0, oob_max = 0;
+  double oob_mean_rel = 0, oob_max_rel = 0;
+  for (const auto& rec : run.frames) {
+    const FrameMetrics& m = rec.metrics;
+    frames.push_back({{"frame", rec.frame},
+                      {"status", to_string(rec.status)},
+                      {"newton_iterations", rec.newton_iterations},
+                      {"gradient_norm", rec.gradient_norm},
+                      {"energy", rec.energy},
+                      {"min_signed_distance", finite_or_null(m.min_signed_distance)},
+                      {"penetration_mean", m.penetration_mean},
+                      {"penetration_max", m.penetration_max},
+                      {"oob_force_mean", m.oob_force_mean},
+                      {"oob_force_max", m.oob_force_max},
+                      {"oob_force_mean_rel", m.oob_force_mean_rel},
+                      {"oob_force_max_rel", m.oob_force_max_rel},
+                      {"step_ms", rec.step_ms}});
+    ms.push_back(rec.step_ms);
+    converged += rec.status == StepStatus::converged;
+    iterations += rec.newton_iterations;
+    pen_max = std::max(pen_max, m.penetration_max);
+    min_d = std::min(min_d, m.min_signed_distance);
+    oob_mean += m.oob_force_mean / run.frames.size();
+    oob_mean_rel += m.oob_force_mean_rel / run.frames.size();
+    oob_max = std::max(oob_max, m.oob_force_max);
+    oob_max_rel = std::max(oob_max_rel, m.oob_force_max_rel);
+  }
+  std::vector<double> sorted = ms;
+  std::sort(sorted.begin(), sorted.end());
+  double total_ms = 0;
+  for (double v : ms) total_ms += v;
+  nlohmann::json summary = {
+      {"scene", scene.file},
+      {"vertices", scene.cloth.num_vertices()},
+      {"triangles", scene.cloth.triangles.size()},
+      {"frames", run.frames.size()},
+      {"time_step", h},
+      {"substeps", scene.settings.substeps},
+      {"converged_frames", converged},
+      {"newton_iterations_total", iterations},
+      {"newton_iterations_mean", static_cast<double>(iterations) / run.frames.size()},
+      {"step_ms_median", sorted[sorted.size() / 2]},
+      {"step_ms_mean", total_ms / ms.size()},
+      {"step_ms_total", total_ms},
+      {"penetration_max", pen_max},
+      {"min_signed_distance", finite_or_null(min_d)},
+      {"oob_force_mean", oob_mean},
+      {"oob_force_max", oob_max},
+      {"oob_force_mean_rel", oob_mean_rel},
+      {"oob_force_max_rel", oob_max_rel}};
+  const nlohmann::json doc = {{"frames", frames}, {"summary", summary}};
+  run.metrics_json = doc.dump(2);
+  if (!out_dir.empty()) write_file_atomically((fs::path(out_dir) / "metrics.json").string(), run.metrics_json);
+  return run;
+}
+
+}  // namespace weft::physics
