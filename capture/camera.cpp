@@ -1,5 +1,6 @@
 #include "capture/camera.h"
 
+#include <Eigen/LU>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <set>
@@ -73,6 +74,8 @@ std::vector<Camera> read_cameras_yaml(const std::string& path) {
     fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     fail(name, ": not a valid OpenCV FileStorage YAML file: ", e.err);
+  } catch (const std::exception& e) {  // e.g. length_error from a corrupt string length
+    fail(name, ": not a valid OpenCV FileStorage YAML file: ", e.what());
   }
   if (!fs.isOpened()) fail(name, ": not a valid OpenCV FileStorage YAML file");
   std::vector<Camera> cameras;
@@ -106,6 +109,10 @@ std::vector<Camera> read_cameras_yaml(const std::string& path) {
     }
   } catch (const cv::Exception& e) {
     fail(name, ": malformed camera file: ", e.err);
+  } catch (const weft::Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(name, ": malformed camera file: ", e.what());
   }
   if (cameras.empty()) fail(name, ": 'cameras' is empty");
   return cameras;

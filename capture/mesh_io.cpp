@@ -26,10 +26,11 @@ struct ObjCorner {
 
 // Resolves a 1-based or negative OBJ index against `count` elements seen so far;
 // returns a 0-based index or throws naming the line.
-int resolve_obj_index(const TextReader& in, long long index, size_t count, const char* what) {
+int resolve_obj_index(const TextReader& in, long long index, size_t count, const char* what,
+                      const char* plural) {
   long long resolved = index > 0 ? index - 1 : static_cast<long long>(count) + index;
   if (index == 0 || resolved < 0 || resolved >= static_cast<long long>(count))
-    in.fail(what, " index ", index, " out of range (", count, " ", what, "s)");
+    in.fail(what, " index ", index, " out of range (", count, " ", plural, ")");
   return static_cast<int>(resolved);
 }
 
@@ -93,8 +94,8 @@ TriangleMesh parse_obj(std::string text, const std::string& name) {
       for (const auto& c : corners) all_vt = all_vt && c.has_vt;
       std::vector<int> vi(corners.size()), ti(corners.size(), 0);
       for (size_t k = 0; k < corners.size(); ++k) {
-        vi[k] = resolve_obj_index(in, corners[k].v, n_vertices, "vertex");
-        if (all_vt) ti[k] = resolve_obj_index(in, corners[k].vt, n_uv, "texture coordinate");
+        vi[k] = resolve_obj_index(in, corners[k].v, n_vertices, "vertex", "vertices");
+        if (all_vt) ti[k] = resolve_obj_index(in, corners[k].vt, n_uv, "texture coordinate", "texture coordinates");
       }
       for (size_t k = 1; k + 1 < corners.size(); ++k) {  // fan triangulation
         faces.insert(faces.end(), {vi[0], vi[k], vi[k + 1]});

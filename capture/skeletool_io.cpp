@@ -27,7 +27,13 @@ long long read_count_line(TextReader& in, std::string_view key, long long max_co
 
 void expect_header(TextReader& in, std::string_view expected_start, std::string_view what) {
   if (!in.next_nonempty_line()) in.fail_eof(std::string(what) + " header");
-  if (in.line().find(expected_start) == std::string_view::npos)
+  auto lower = [](std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+  };
+  // Case-insensitive: ddc.character starts "skeletool character file v1.0".
+  if (lower(in.line()).find(lower(expected_start)) == std::string::npos)
     in.fail("expected a header line starting '", expected_start, "' (", what, "), found '", in.line(), "'");
 }
 

@@ -62,11 +62,11 @@ void normalize_weights(SkinningWeights& w, const std::string& what) {
 }
 
 namespace {
-void check_sizes(const Vertices& rest, const SkinningWeights& w, const Transforms& S, const char* fn) {
+void check_sizes(const Vertices& rest, const SkinningWeights& w, size_t num_transforms, const char* fn) {
   if (rest.rows() != w.num_vertices())
     fail(fn, ": ", rest.rows(), " vertices but weights for ", w.num_vertices());
-  if (static_cast<int>(S.size()) != w.num_joints)
-    fail(fn, ": ", S.size(), " transforms but weights over ", w.num_joints, " joints");
+  if (static_cast<int>(num_transforms) != w.num_joints)
+    fail(fn, ": ", num_transforms, " transforms but weights over ", w.num_joints, " joints");
   for (int v = 0; v < w.num_vertices(); ++v) {
     if (w.vertices[v].empty()) fail(fn, ": vertex ", v, " has no skinning influence");
     for (const SkinInfluence& inf : w.vertices[v])
@@ -77,7 +77,7 @@ void check_sizes(const Vertices& rest, const SkinningWeights& w, const Transform
 }  // namespace
 
 Vertices linear_blend_skinning(const Vertices& rest, const SkinningWeights& w, const Transforms& S) {
-  check_sizes(rest, w, S, "linear_blend_skinning");
+  check_sizes(rest, w, S.size(), "linear_blend_skinning");
   Vertices out(rest.rows(), 3);
 #pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < rest.rows(); ++v) {
@@ -99,9 +99,14 @@ DualQuaternion to_dual_quaternion(const Eigen::Isometry3d& T) {
 }
 
 Vertices dual_quaternion_skinning(const Vertices& rest, const SkinningWeights& w, const Transforms& S) {
-  check_sizes(rest, w, S, "dual_quaternion_skinning");
   std::vector<DualQuaternion> q(S.size());
   for (size_t j = 0; j < S.size(); ++j) q[j] = to_dual_quaternion(S[j]);
+  return dual_quaternion_skinning(rest, w, q);
+}
+
+Vertices dual_quaternion_skinning(const Vertices& rest, const SkinningWeights& w,
+                                  const std::vector<DualQuaternion>& q) {
+  check_sizes(rest, w, q.size(), "dual_quaternion_skinning");
   Vertices out(rest.rows(), 3);
 #pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < rest.rows(); ++v) {

@@ -57,5 +57,8 @@ DualQuaternion to_dual_quaternion(const Eigen::Isometry3d& T);
 // q0_ref the vertex's first listed bone; normalised by ‖b0‖; v' = R(b0) v + 2 vec(be b0*).
 Vertices dual_quaternion_skinning(const Vertices& rest, const SkinningWeights& weights,
                                   const Transforms& skinning);
+// The same from per-joint unit dual quaternions (either sign of each is fine).
+Vertices dual_quaternion_skinning(const Vertices& rest, const SkinningWeights& weights,
+                                  const std::vector<DualQuaternion>& joints);
 
 }  // namespace weft::capture
