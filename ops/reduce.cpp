@@ -59,6 +59,22 @@ ReducePlan plan_reduce(const char* op, const Tensor& x, const Attrs& attrs) {
   return p;
 }
 
+// The input's axes with size-1 axes dropped and neighbours of the same kind (reduced or
+// kept) merged: [N,C,H,W] over axes 0, 2, 3 becomes [N, C, H·W] with flags r, k, r.
+void compact_axes(const Shape& in, const Shape& keep, std::vector<int64_t>& sizes,
+                  std::vector<bool>& reduced) {
+  for (size_t i = 0; i < in.size(); ++i) {
+    if (in[i] == 1) continue;
+    const bool r = keep[i] == 1;
+    if (!sizes.empty() && reduced.back() == r)
+      sizes.back() *= in[i];
+    else {
+      sizes.push_back(in[i]);
+      reduced.push_back(r);
+    }
+  }
+}
+
 // out[j] = Σ over the reduced elements of f(x) for output j, in double.
 template <class T, class F>
 std::vector<double> reduce_sum(const Tensor& x, const ReducePlan& p, F f) {
@@ -92,8 +108,36 @@ std::vector<double> reduce_sum(const Tensor& x, const ReducePlan& p, F f) {
       }
     }
   } else {
-    for_each_broadcast(x.shape(), p.keep_shape, p.keep_shape,
-                       [&](int64_t i, int64_t io, int64_t) { acc[io] += f(px[i]); });
+    // Several runs of reduced axes (e.g. axes 0, 2, 3 of NCHW): reduce one run per
+    // pass, innermost first, each pass a blocked reduction of the previous result.
+    std::vector<int64_t> sizes;
+    std::vector<bool> reduced;
+    compact_axes(x.shape(), p.keep_shape, sizes, reduced);
+    std::vector<double> cur;
+    bool first = true;
+    for (size_t r = sizes.size(); r-- > 0;) {
+      if (!reduced[r]) continue;
+      int64_t outer = 1, inner = 1;
+      for (size_t i = 0; i < r; ++i) outer *= sizes[i];
+      for (size_t i = r + 1; i < sizes.size(); ++i) inner *= sizes[i];
+      const int64_t count = sizes[r];
+      std::vector<double> next(static_cast<size_t>(outer * inner), 0.0);
+#pragma omp parallel for if (outer * count * inner > kParallelThreshold && outer > 1)
+      for (int64_t o = 0; o < outer; ++o) {
+        double* a = next.data() + o * inner;
+        for (int64_t c = 0; c < count; ++c) {
+          const int64_t base = (o * count + c) * inner;
+          if (first)
+            for (int64_t i = 0; i < inner; ++i) a[i] += f(px[base + i]);
+          else
+            for (int64_t i = 0; i < inner; ++i) a[i] += cur[base + i];
+        }
+      }
+      cur = std::move(next);
+      first = false;
+      sizes.erase(sizes.begin() + static_cast<std::ptrdiff_t>(r));
+    }
+    acc = std::move(cur);
   }
   return acc;
 }

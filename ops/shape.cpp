@@ -38,6 +38,24 @@ void for_each_strided(const Shape& shape, const std::vector<int64_t>& strides, F
   }
 }
 
+// Splits a strided walk over the first axis so large copies run on all threads: calls
+// f(flat offset of block i, strided offset of block i, shape[1:], strides[1:]) for each
+// index i of axis 0 (or once for the whole array when it is small). Blocks touch
+// disjoint elements, so they may run concurrently.
+template <class F>
+void for_each_outer_block(const Shape& shape, const std::vector<int64_t>& strides, F&& f) {
+  const int64_t n = shape_numel(shape);
+  if (shape.size() < 2 || shape[0] < 2 || n < (1 << 16)) {
+    f(int64_t{0}, int64_t{0}, shape, strides);
+    return;
+  }
+  const Shape sub(shape.begin() + 1, shape.end());
+  const std::vector<int64_t> sub_strides(strides.begin() + 1, strides.end());
+  const int64_t block = shape_numel(sub);
+#pragma omp parallel for
+  for (int64_t i = 0; i < shape[0]; ++i) f(i * block, i * strides[0], sub, sub_strides);
+}
+
 // out (contiguous, `shape`) = in read at base + strided offsets.
 Tensor gather_strided(const char* op, const Tensor& in, const Shape& shape,
                       const std::vector<int64_t>& strides, int64_t base) {
@@ -45,7 +63,11 @@ Tensor gather_strided(const char* op, const Tensor& in, const Shape& shape,
   auto run = [&]<class T>() {
     const T* pi = in.data<T>() + base;
     T* po = out.data<T>();
-    for_each_strided(shape, strides, [&](int64_t i, int64_t off) { po[i] = pi[off]; });
+    for_each_outer_block(shape, strides, [&](int64_t out0, int64_t in0, const Shape& sub,
+                                             const std::vector<int64_t>& sub_strides) {
+      for_each_strided(sub, sub_strides,
+                       [&](int64_t i, int64_t off) { po[out0 + i] = pi[in0 + off]; });
+    });
   };
   if (in.dtype() == DType::I64)
     run.template operator()<int64_t>();
@@ -63,7 +85,11 @@ Tensor scatter_strided(const char* op, const Tensor& g, const Shape& target, con
   dispatch_float(g.dtype(), op, [&]<class T>() {
     const T* pg = g.data<T>();
     T* po = out.data<T>() + base;
-    for_each_strided(shape, strides, [&](int64_t i, int64_t off) { po[off] = pg[i]; });
+    for_each_outer_block(shape, strides, [&](int64_t out0, int64_t in0, const Shape& sub,
+                                             const std::vector<int64_t>& sub_strides) {
+      for_each_strided(sub, sub_strides,
+                       [&](int64_t i, int64_t off) { po[in0 + off] = pg[out0 + i]; });
+    });
   });
   return out;
 }

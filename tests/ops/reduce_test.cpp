@@ -1,6 +1,8 @@
 // Reductions: values in both dtypes over axis sets, keepdim, gradients, bad axes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "ops/ops.h"
 #include "tests/ops/test_util.h"
 
@@ -74,6 +76,28 @@ TEST(ReduceFloat32, LongSumsKeepPrecision) {
   Tensor x = Tensor::full({n}, 0.1, DType::F32);
   EXPECT_NEAR(ops::sum(x).item(), 0.1f * n, 1e-2);
   EXPECT_NEAR(ops::mean(x.view({1024, 1024}), {0}).at({7}), 0.1f, 1e-7);
+}
+
+TEST(ReduceFloat64, SeveralAxisRunsMatchNaiveLoop) {
+  // Axes 0, 2, 3 of an NCHW batch (two separate runs), large enough to run threaded.
+  Generator g(3);
+  const int64_t N = 4, C = 5, H = 40, W = 50;
+  Tensor x = Tensor::randn({N, C, H, W}, g, DType::F64);
+  std::vector<double> want(C, 0.0), want_max(C, -1e300);
+  const std::vector<double> v = x.to_vector();
+  for (int64_t n = 0; n < N; ++n)
+    for (int64_t c = 0; c < C; ++c)
+      for (int64_t k = 0; k < H * W; ++k) {
+        const double e = v[(n * C + c) * H * W + k];
+        want[c] += e;
+        want_max[c] = std::max(want_max[c], e);
+      }
+  expect_values(ops::sum(x, {0, 2, 3}), want, 1e-12);
+  expect_values(ops::max(x, {0, 2, 3}), want_max, 0);
+  Tensor m = ops::mean(x, {0, -1, 2}, true);
+  EXPECT_EQ(m.shape(), (Shape{1, C, 1, 1}));
+  for (double& w : want) w /= static_cast<double>(N * H * W);
+  expect_values(m, want, 1e-12);
 }
 
 TEST(ReduceErrors, BadAxesNameOpAndShape) {

@@ -113,6 +113,35 @@ TEST_P(ShapeOps, StopGradientAliasesAndBlocks) {
 INSTANTIATE_TEST_SUITE_P(Dtypes, ShapeOps, ::testing::Values(DType::F32, DType::F64),
                          testing::dtype_label);
 
+TEST(ShapeLarge, ThreadedPermuteAndSliceMatchNaiveLoops) {
+  // Large enough for the copies to split over threads.
+  const int64_t A = 6, B = 70, C = 300;
+  Tensor x = Tensor::arange(0, static_cast<double>(A * B * C), 1, DType::F64).view({A, B, C});
+  x.set_requires_grad();
+  Tensor p = ops::permute(x, {2, 0, 1});
+  const std::vector<double> pv = p.to_vector();
+  bool ok = true;
+  for (int64_t c = 0; c < C; ++c)
+    for (int64_t a = 0; a < A; ++a)
+      for (int64_t b = 0; b < B; ++b) ok &= pv[(c * A + a) * B + b] == double((a * B + b) * C + c);
+  EXPECT_TRUE(ok);
+  Tensor s = ops::slice(x, 2, 1, C, 3);  // 100 of 300 columns
+  const std::vector<double> sv = s.to_vector();
+  for (int64_t a = 0; a < A && ok; ++a)
+    for (int64_t b = 0; b < B; ++b)
+      for (int64_t k = 0; k < 100; ++k) ok &= sv[(a * B + b) * 100 + k] == double((a * B + b) * C + 1 + 3 * k);
+  EXPECT_TRUE(ok);
+  ops::sum(s).backward();
+  const std::vector<double> gv = x.grad().to_vector();
+  double total = 0;
+  for (int64_t i = 0; i < A * B * C; ++i) {
+    total += gv[i];
+    ok &= gv[i] == ((i % C) % 3 == 1 ? 1.0 : 0.0);
+  }
+  EXPECT_TRUE(ok);
+  EXPECT_EQ(total, double(A * B * 100));
+}
+
 TEST(ShapeErrors, BadInputNamesOpAndShapes) {
   Tensor x = Tensor::ones({2, 3});
   expect_error([&] { ops::reshape(x, {4}); }, {"reshape", "[2, 3]", "[4]"});
