@@ -79,7 +79,6 @@ void check_sizes(const Vertices& rest, const SkinningWeights& w, size_t num_tran
 Vertices linear_blend_skinning(const Vertices& rest, const SkinningWeights& w, const Transforms& S) {
   check_sizes(rest, w, S.size(), "linear_blend_skinning");
   Vertices out(rest.rows(), 3);
-#pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < rest.rows(); ++v) {
     Eigen::Matrix<double, 3, 4> M = Eigen::Matrix<double, 3, 4>::Zero();
     for (const SkinInfluence& inf : w.vertices[v]) M += inf.weight * S[inf.joint].affine();
@@ -108,7 +107,6 @@ Vertices dual_quaternion_skinning(const Vertices& rest, const SkinningWeights& w
                                   const std::vector<DualQuaternion>& q) {
   check_sizes(rest, w, q.size(), "dual_quaternion_skinning");
   Vertices out(rest.rows(), 3);
-#pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < rest.rows(); ++v) {
     const auto& infl = w.vertices[v];
     const Eigen::Vector4d ref = q[infl.front().joint].real.coeffs();
