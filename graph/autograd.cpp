@@ -1,9 +1,11 @@
 #include "graph/autograd.h"
 
+#include <chrono>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "graph/op_registry.h"
+#include "graph/profiler.h"
 
 namespace weft {
 
@@ -105,7 +107,12 @@ void run_backward(const Tensor& root, const Tensor& grad_root, bool retain_graph
            "' was freed by an earlier backward; pass retain_graph=true to that call");
     const BackwardContext ctx{node->inputs, node->output, g,
                               node->attrs,  node->saved,  node->needs_grad};
+    const bool profiled = profiling_enabled();
+    const auto start = profiled ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
     std::vector<Tensor> grads = node->op->backward(ctx);
+    if (profiled)
+      record_op_time(node->op->name, true,
+                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     if (grads.size() != node->inputs.size())
       fail("backward of op '", node->op->name, "' returned ", grads.size(),
            " gradients for ", node->inputs.size(), " inputs");

@@ -1,6 +1,9 @@
 #include "graph/op_registry.h"
 
+#include <chrono>
+
 #include "graph/autograd.h"
+#include "graph/profiler.h"
 
 namespace weft {
 
@@ -54,7 +57,14 @@ Tensor apply(const OpDef& op, std::vector<Tensor> inputs, const Attrs& attrs) {
   Tensor out;
   {
     NoGradGuard no_grad;
-    out = op.forward(ForwardContext{inputs, attrs, saved});
+    if (profiling_enabled()) {
+      const auto start = std::chrono::steady_clock::now();
+      out = op.forward(ForwardContext{inputs, attrs, saved});
+      record_op_time(op.name, false,
+                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    } else {
+      out = op.forward(ForwardContext{inputs, attrs, saved});
+    }
   }
   if (!out.defined()) fail(op.name, ": forward returned no tensor");
   for (const Tensor& in : inputs)

@@ -36,4 +36,9 @@ int num_threads() {
   return g_threads;
 }
 
+namespace {
+// Apply WEFT_NUM_THREADS as soon as the library loads, before any parallel kernel runs.
+const int g_initial_threads = num_threads();
+}  // namespace
+
 }  // namespace weft
