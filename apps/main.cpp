@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   weft::apps::add_demo_command(app);
   weft::apps::add_sim_command(app);
   weft::apps::add_nn_command(app);
+  weft::apps::add_bench_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
