@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   weft::apps::add_ops_command(app);
   weft::apps::add_demo_command(app);
   weft::apps::add_sim_command(app);
+  weft::apps::add_pose_command(app);
   weft::apps::add_nn_command(app);
   weft::apps::add_bench_command(app);
   try {
