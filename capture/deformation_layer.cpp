@@ -71,6 +71,26 @@ DeformationLayer::DeformationLayer(const Character& character, DType dtype) : dt
     marker_index_ = Tensor::from_indices({M, 1}, joints);
     marker_weights_ = Tensor::ones({M, 1}, dtype);
   }
+  // BODY_25: padded source lists over the rows [joint origins (J); markers (M)].
+  const int64_t J = sk.num_joints();
+  for (const LandmarkSource& src : character.body25)
+    body25_sources_ = std::max<int64_t>(body25_sources_, src.joints.size() + src.markers.size());
+  std::vector<int64_t> idx;
+  std::vector<double> w, mask;
+  for (const LandmarkSource& src : character.body25) {
+    std::vector<int64_t> rows(src.joints.begin(), src.joints.end());
+    for (int m : src.markers) rows.push_back(J + m);
+    for (int64_t s = 0; s < body25_sources_; ++s) {
+      const bool used = s < static_cast<int64_t>(rows.size());
+      idx.push_back(used ? rows[s] : 0);
+      w.push_back(used ? 1.0 / static_cast<double>(rows.size()) : 0.0);
+    }
+    mask.push_back(rows.empty() ? 0.0 : 1.0);
+  }
+  body25_index_ = Tensor::from_indices({25 * body25_sources_}, idx);
+  body25_weights_ = Tensor::from_data({25, body25_sources_, 1}, w, dtype);
+  body25_mask_ = Tensor::from_data({25}, mask, dtype);
+
   body_ = make_surface(character.body, dtype);
   if (character.has_cloth()) {
     cloth_ = make_surface(*character.cloth, dtype);
@@ -91,6 +111,15 @@ PosedJoints DeformationLayer::pose(const Tensor& dofs) const {
         marker_offsets_, ops::forward_kinematics(params, marker_chain_), marker_index_,
         marker_weights_);
   return out;
+}
+
+Tensor DeformationLayer::body25(const PosedJoints& joints) const {
+  const int64_t B = joints.global.size(0), J = joints.global.size(1);
+  Tensor points = ops::reshape(ops::slice(joints.global, 3, 3, 4), {B, J, 3});  // origins
+  if (joints.markers.defined()) points = ops::concat({points, joints.markers}, 1);
+  const Tensor picked = ops::reshape(ops::index_select(points, 1, body25_index_),
+                                     {B, 25, body25_sources_, 3});
+  return ops::sum(ops::mul(picked, body25_weights_), {2});
 }
 
 Tensor DeformationLayer::deform(const DeformableSurface& s, const PosedJoints& joints,

@@ -40,6 +40,12 @@ class DeformationLayer {
   Tensor deform(const DeformableSurface& surface, const PosedJoints& joints,
                 const Tensor& node_angles, const Tensor& node_translations) const;
 
+  // BODY_25 keypoints [B,25,3] from posed joints: each the mean of its joint origins
+  // and markers (character.body25). Unmapped keypoints are 0; body25_mask() is 1 for
+  // mapped ones and 0 otherwise ([25]), to multiply into detection confidences.
+  Tensor body25(const PosedJoints& joints) const;
+  const Tensor& body25_mask() const { return body25_mask_; }
+
   const DeformableSurface& body() const { return body_; }
   const DeformableSurface* cloth() const { return has_cloth_ ? &cloth_ : nullptr; }
   int64_t num_dofs() const { return dof_to_joint_.size(0); }
@@ -53,6 +59,10 @@ class DeformationLayer {
   ops::KinematicChain marker_chain_; // G(θ)·G(0)⁻¹
   Tensor marker_offsets_;            // [M,3] in the zero-pose model frame
   Tensor marker_index_, marker_weights_;  // int64 [M,1], [M,1]
+  Tensor body25_index_;    // int64 [25·S]: rows of [joint origins; markers]
+  Tensor body25_weights_;  // [25,S,1]
+  Tensor body25_mask_;     // [25]
+  int64_t body25_sources_ = 1;  // S
   DeformableSurface body_, cloth_;
   bool has_cloth_ = false;
 };

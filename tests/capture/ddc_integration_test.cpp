@@ -42,6 +42,9 @@ TEST(Ddc, LoadsTheTemplate) {
     EXPECT_NEAR(s, 1.0, 1e-12);
   }
   EXPECT_EQ(skin_bone_joint(ch.skeleton, "LeftForeArm"), ch.skeleton.joint_index("LeftForeArm_rz"));
+  for (int v = 0; v < ch.body.mesh.num_vertices(); ++v)
+    ASSERT_NEAR(ch.body.graph.vertex_weights.row(v).sum(), 1.0, 1e-12) << "vertex " << v;
+  EXPECT_EQ(ch.body.graph.edges.rows(), 2550);  // the unique edges of ddc_graph.obj's 1700 faces
   // Rigidity: clothing nodes (0.2) and skin nodes (1.0) both present.
   EXPECT_NEAR(ch.body.graph.rigidity.minCoeff(), 0.2, 1e-12);
   EXPECT_NEAR(ch.body.graph.rigidity.maxCoeff(), 1.0, 1e-12);
@@ -99,6 +102,10 @@ TEST(Ddc, PosesTheCapturedWalk) {
     const PosedCharacter p = pose_character(ch, walk.dofs.row(f).transpose());
     ASSERT_TRUE(p.body.allFinite()) << "frame " << f;
     ASSERT_TRUE(p.markers.allFinite()) << "frame " << f;
+    ASSERT_TRUE(p.body25.allFinite()) << "frame " << f;  // every keypoint is mapped
+    // y is up: the nose is above the neck, the neck above the mid-hip, in every frame.
+    EXPECT_GT(p.body25(0, 1), p.body25(1, 1)) << "frame " << f;
+    EXPECT_GT(p.body25(1, 1), p.body25(8, 1)) << "frame " << f;
     max_bone_change = std::max(max_bone_change, (bone_lengths(p.joints) - L0).cwiseAbs().maxCoeff());
     // Feet: the lowest of the toe tips and ankles (y is up in ddc).
     lowest_foot[f] = std::min({p.joints[lf].translation().y(), p.joints[rf].translation().y(),

@@ -62,6 +62,20 @@ TEST_F(DeformationLayerDdc, MatchesTheReferencePosingOnCapturedFrames) {
   EXPECT_LT(worst_marker, 1e-6) << "mm";
 }
 
+TEST_F(DeformationLayerDdc, Body25KeypointsMatchTheReference) {
+  const DeformationLayer layer(*character_, DType::F64);
+  const PosedJoints joints = layer.pose(frames({42}, DType::F64));
+  const Tensor k = layer.body25(joints);
+  const PosedCharacter ref = pose_character(*character_, motion_->dofs.row(42).transpose());
+  int mapped = 0;
+  for (int64_t i = 0; i < 25; ++i) {
+    if (layer.body25_mask().at({i}) == 0) continue;
+    ++mapped;
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(k.at({0, i, a}), ref.body25(i, a), 1e-6) << "keypoint " << i;
+  }
+  EXPECT_EQ(mapped, 25);  // configs/characters/ddc.yaml maps every BODY_25 keypoint
+}
+
 TEST_F(DeformationLayerDdc, IdentityEmbeddedDeformationChangesNothing) {
   const DeformationLayer layer(*character_, DType::F64);
   const PosedJoints joints = layer.pose(frames({10, 20}, DType::F64));
