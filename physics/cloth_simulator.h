@@ -31,7 +31,7 @@ struct SimulationSettings {
   // vs 10 iterations on a frame of a cloth falling on a sphere); the solver's adaptive
   // regularisation handles the indefinite sum instead. Bending and collision Hessians
   // are always projected.
-  bool project_membrane_hessian = false;
+  bool project_membrane_hessian = true;
 };
 // Throws weft::Error naming the field if a value is non-physical.
 void validate(const SimulationSettings& settings);

@@ -2,7 +2,7 @@
 
 #include <Eigen/Geometry>
 
-#include "physics/psd_projection.h"
+#include <Eigen/Eigenvalues>
 
 namespace weft::physics {
 
@@ -51,18 +51,27 @@ double MembraneEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
       for (int a = 0; a < 3; ++a) g->segment<3>(3 * el.v[a]) += P * el.beta.row(a).transpose();
     }
     if (H) {
-      // d²ψ/dF² applied to each unit direction dF; vec(F) is column-major.
+      // d²ψ/dF²[dF] = dF S + F (2μ dG + λ tr(dG) I). Its second part is PSD for any F
+      // (⟨dF, ·⟩ = 2μ‖dG‖² + λ tr(dG)²); only the geometric term dF S is indefinite, when
+      // S has a compressive (negative) eigenvalue. The projection clamps those eigenvalues
+      // of S, which makes the element Hessian PSD by construction and leaves it exact in
+      // tension.
+      Eigen::Matrix2d S_used = S;
+      if (project_hessian_) {
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
+        S_used = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
+                 eig.eigenvectors().transpose();
+      }
       Eigen::Matrix<double, 6, 6> hf;
       for (int k = 0; k < 6; ++k) {
         Mat32 dF = Mat32::Zero();
         dF(k % 3, k / 3) = 1.0;
         const Eigen::Matrix2d FtdF = F.transpose() * dF;
         const Eigen::Matrix2d dG = 0.5 * (FtdF + FtdF.transpose());
-        const Mat32 dP = dF * S + F * (2.0 * mu_ * dG + lambda_ * dG.trace() * I);
+        const Mat32 dP = dF * S_used + F * (2.0 * mu_ * dG + lambda_ * dG.trace() * I);
         hf.col(k) = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(dP.data());
       }
       hf = 0.5 * (hf + hf.transpose()).eval();
-      if (project_hessian_) project_to_psd<6>(hf);
       Eigen::Matrix<double, 9, 9> hx;
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) {

@@ -3,7 +3,8 @@
 // its current 3D edges, G = ½(FᵀF − I) is the Green strain and
 //   W = A · t · (μ tr(G²) + λ/2 tr(G)²),  λ = Eν/(1−ν²),  μ = E/(2(1+ν)),
 // with A the rest area (m²), t the thickness (m) and E in Pa: W in joules. The element
-// Hessian is projected to PSD in F-space (6×6), which keeps the 9×9 one PSD.
+// Hessian is made PSD by clamping the compressive eigenvalues of the stress S in its
+// geometric term (see evaluate), exact in tension.
 #include <vector>
 
 #include "physics/cloth_model.h"

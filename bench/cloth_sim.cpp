@@ -1,0 +1,146 @@
+// Cloth simulator speed: time per 1/30 s frame (two implicit Euler steps of 1/60 s),
+// Newton iterations and the share of the linear solve, collision queries and the
+// remaining energy evaluation/assembly, for
+//   drape: a 1 m square cloth dropped on a radius-0.3 m sphere (ARCSim's comparison scene)
+//   skirt: a tube (skirt-like) whose top ring follows a body mesh moving sideways.
+// Usage: bench_cloth_sim [drape|skirt] [direct|reused_factor] N FRAMES  (N×N vertices)
+// Runs single-threaded; prints one line per frame and a median summary.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "graph/threads.h"
+#include "physics/cloth_simulator.h"
+
+using namespace weft::physics;
+
+namespace {
+
+// A closed cylinder (capped) of radius r from y0 to y1 around the y axis.
+BodyMesh cylinder_body(double r, double y0, double y1, int rings, int segments) {
+  std::vector<Eigen::Vector3d> v;
+  std::vector<std::array<int, 3>> f;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double a = 2 * M_PI * j / segments;
+      v.emplace_back(r * std::cos(a), y0 + (y1 - y0) * i / rings, r * std::sin(a));
+    }
+  const int bottom = static_cast<int>(v.size());
+  v.emplace_back(0, y0, 0);
+  const int top = static_cast<int>(v.size());
+  v.emplace_back(0, y1, 0);
+  auto id = [&](int i, int j) { return i * segments + (j % segments); };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      f.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      f.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+    }
+  for (int j = 0; j < segments; ++j) {
+    f.push_back({bottom, id(0, j), id(0, j + 1)});
+    f.push_back({top, id(rings, j + 1), id(rings, j)});
+  }
+  Eigen::MatrixX3d m(v.size(), 3);
+  for (size_t k = 0; k < v.size(); ++k) m.row(k) = v[k].transpose();
+  return BodyMesh(m, f);
+}
+
+// A tube of n×n vertices (n around, n down), radius r, hanging from y_top, length len.
+ClothMesh tube(int n, double r, double y_top, double len, double density) {
+  Positions x(3 * n * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double a = 2 * M_PI * j / n;
+      x.segment<3>(3 * (i * n + j)) = Vec3(r * std::cos(a), y_top - len * i / (n - 1), r * std::sin(a));
+    }
+  std::vector<std::array<int, 3>> t;
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const int a = i * n + j, b = i * n + (j + 1) % n, c = (i + 1) * n + j, d = (i + 1) * n + (j + 1) % n;
+      t.push_back({a, c, d});
+      t.push_back({a, d, b});
+    }
+  return make_cloth_mesh(x, t, density);
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string scene = argc > 1 ? argv[1] : "drape";
+  const std::string solver = argc > 2 ? argv[2] : "reused_factor";
+  const int n = argc > 3 ? std::atoi(argv[3]) : 32;
+  const int frames = argc > 4 ? std::atoi(argv[4]) : 30;
+  weft::set_num_threads(1);
+  SimulationSettings s;
+  s.time_step = 1.0 / 60;
+  s.collision_thickness = 0.005;
+  s.collision_stiffness = 1e4;
+  s.newton.tolerance = 1e-6;
+  s.newton.max_iterations = 50;
+  s.newton.linear_solver =
+      solver == "direct" ? LinearSolverKind::direct : LinearSolverKind::reused_factor;
+  const bool skirt = scene == "skirt";
+  ClothMesh mesh = skirt ? tube(n, 0.17, 1.0, 0.6, 0.2)
+                         : make_grid_cloth(Vec3(-0.5, 0.75, -0.5), 1.0, 1.0, n, n, "xz", 0.2);
+  ClothSimulator sim(mesh, s);
+  std::vector<int> ring;
+  Eigen::MatrixX3d body_rest;
+  if (skirt) {
+    sim.add_body(cylinder_body(0.15, 0.0, 1.05, 40, 64));
+    body_rest = sim.body(0).vertices();
+    for (int j = 0; j < n; ++j) ring.push_back(j);
+    sim.set_pins(ring);
+  } else {
+    sim.set_spheres({{Vec3(0, 0.4, 0), 0.3}});
+  }
+  std::printf("scene %s solver %s vertices %d triangles %zu frames %d\n", scene.c_str(),
+              solver.c_str(), mesh.num_vertices(), mesh.triangles.size(), frames);
+  Positions x = mesh.rest, v = Positions::Zero(x.size());
+  std::vector<double> frame_ms, iters;
+  double lin = 0, coll = 0, energy = 0, total = 0;
+  int failed = 0;
+  for (int f = 0; f < frames; ++f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    int it = 0;
+    for (int sub = 0; sub < 2; ++sub) {
+      if (skirt) {
+        const double t = (2 * f + sub + 1) * s.time_step;
+        const Vec3 offset(0.15 * std::sin(2 * M_PI * 0.8 * t), 0, 0);
+        Eigen::MatrixX3d moved = body_rest;
+        moved.rowwise() += offset.transpose();
+        sim.body(0).set_vertices(moved);
+        std::vector<Vec3> targets;
+        for (int j : ring) targets.push_back(mesh.rest_vertex(j) + offset);
+        sim.set_pins(ring, targets);
+      }
+      const NewtonReport r = sim.advance(x, v, s.time_step);
+      it += r.iterations;
+      failed += r.status != StepStatus::converged;
+      lin += r.linear_solve_ms;
+      coll += r.energy_ms.back();  // the collision energy is last
+      for (size_t k = 0; k + 1 < r.energy_ms.size(); ++k) energy += r.energy_ms[k];
+      total += r.total_ms;
+    }
+    frame_ms.push_back(ms_since(t0));
+    iters.push_back(it);
+    std::printf("frame %d: %.1f ms, %d Newton iterations\n", f + 1, frame_ms.back(), it);
+  }
+  std::vector<double> sorted = frame_ms;
+  std::sort(sorted.begin(), sorted.end());
+  double mean_it = 0;
+  for (double i : iters) mean_it += i / iters.size();
+  std::printf(
+      "SUMMARY scene=%s solver=%s vertices=%d median_frame_ms=%.1f mean_newton_per_frame=%.1f "
+      "linear_solve=%.0f%% collision=%.0f%% energies_assembly=%.0f%% non_converged_steps=%d\n",
+      scene.c_str(), solver.c_str(), mesh.num_vertices(), sorted[sorted.size() / 2], mean_it,
+      100 * lin / total, 100 * coll / total, 100 * energy / total, failed);
+  return 0;
+}
