@@ -4,7 +4,7 @@
 // (2·N·O·C·kh·kw·Ho·Wo flops) and forward+backward (3× that: dx and dW each cost one
 // forward's worth).
 //
-//   bench_conv2d [--repeats 7] [--batch 8] [--size 128] [--threads 2]
+//   bench_conv2d [--repeats 7] [--batch 8] [--size 128] [--threads 2] [--layer SUBSTRING]
 #include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
@@ -57,8 +57,12 @@ struct Timing {
 
 template <class F>
 Timing median_time(int repeats, int threads, F f) {
-  f();  // warm-up: scratch buffers, allocator, page faults
-  f();
+  // Warm-up: scratch buffers, allocator, page faults. The first calls of a new shape run
+  // several times slower on this (virtualised) machine, for up to a dozen calls at 2
+  // threads (the stem conv: ~18 ms for 12 calls, then 3.3 ms), so at least 12 calls and
+  // 0.3 s go before timing starts.
+  const auto warm_start = Clock::now();
+  for (int i = 0; i < 12 || Clock::now() - warm_start < std::chrono::milliseconds(300); ++i) f();
   std::vector<double> wall, cpu;
   for (int r = 0; r < repeats; ++r) {
     const double c0 = cpu_seconds(threads);
@@ -90,10 +94,12 @@ std::string loadavg() {
 int main(int argc, char** argv) {
   int repeats = 7, threads = 2;
   int64_t batch = 8, size = 128;
+  std::string only;  // run only the layers whose name contains this
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     const long v = std::atol(argv[i + 1]);
-    if (a == "--repeats") repeats = static_cast<int>(v);
+    if (a == "--layer") only = argv[i + 1];
+    else if (a == "--repeats") repeats = static_cast<int>(v);
     else if (a == "--batch") batch = v;
     else if (a == "--size") size = v;
     else if (a == "--threads") threads = static_cast<int>(v);
@@ -143,6 +149,7 @@ int main(int argc, char** argv) {
   };
   std::vector<Row> rows;
   for (const Layer& L : layers) {
+    if (!only.empty() && std::string(L.name).find(only) == std::string::npos) continue;
     const int64_t out = (L.in + 2 * L.pad - L.k) / L.stride + 1;
     const double flops = 2.0 * batch * L.O * L.C * L.k * L.k * out * out;
     Tensor x = Tensor::randn({batch, L.C, L.in, L.in}, gen);

@@ -51,9 +51,20 @@ void add_pending(PendingGrad& p, const Tensor& g) {
   accumulate_into(p.value, g);
 }
 
-void accumulate_leaf(TensorImpl& leaf, const Tensor& g) {
+// A gradient nobody else holds (a fresh op output, in its own whole storage) becomes the
+// leaf's gradient as it is; anything shared is copied, so later accumulation into the
+// leaf's gradient cannot change a tensor someone else sees.
+bool exclusively_owned(const Tensor& g) {
+  const std::shared_ptr<TensorImpl>& impl = g.impl_ptr();
+  return impl.use_count() == 1 && impl->storage.use_count() == 1 && impl->offset == 0 &&
+         !impl->grad_fn &&
+         impl->storage->bytes == static_cast<size_t>(g.numel()) * dtype_size(g.dtype());
+}
+
+void accumulate_leaf(TensorImpl& leaf, Tensor&& g) {
   if (!leaf.grad) {
-    leaf.grad = g.clone().impl_ptr();
+    leaf.grad = exclusively_owned(g) ? g.impl_ptr() : g.clone().impl_ptr();
+    g = Tensor();
     return;
   }
   Tensor acc(leaf.grad);
@@ -89,7 +100,7 @@ void run_backward(const Tensor& root, const Tensor& grad_root, bool retain_graph
     fail("backward: output gradient ", describe(grad_root), " does not match output ",
          describe(root));
   if (root.is_leaf()) {
-    accumulate_leaf(*root.impl(), grad_root);
+    accumulate_leaf(*root.impl(), Tensor(grad_root));
     return;
   }
   const std::vector<std::shared_ptr<Node>> order = reverse_topological(root.grad_fn());
@@ -125,7 +136,7 @@ void run_backward(const Tensor& root, const Tensor& grad_root, bool retain_graph
       if (auto producer = input.grad_fn())
         add_pending(pending[producer.get()], grads[i]);
       else
-        accumulate_leaf(*input.impl(), grads[i]);
+        accumulate_leaf(*input.impl(), std::move(grads[i]));
     }
     if (!retain_graph) {
       // Free what this node kept for its backward; the graph cannot be run again.

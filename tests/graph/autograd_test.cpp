@@ -16,6 +16,28 @@ TEST(Autograd, GradientsAccumulateAcrossBackwardCalls) {
   EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{4, 8, 12}));
 }
 
+// A leaf takes a fresh op output as its gradient without copying, but never a tensor
+// someone else holds: the output gradient the caller passed, or one shared by two inputs.
+TEST(Autograd, LeafGradientNeverAliasesTheCallersTensors) {
+  Tensor x = Tensor::from_data({3}, std::vector<double>{1, 2, 3}, DType::F64);
+  x.set_requires_grad();
+  Tensor gy = Tensor::from_data({3}, std::vector<double>{1, 1, 1}, DType::F64);
+  ops::reshape(x, {3}).backward(gy);  // reshape's backward hands gy back
+  EXPECT_FALSE(x.grad().shares_storage(gy));
+  ops::reshape(x, {3}).backward(gy);  // accumulates into x.grad, not into gy
+  EXPECT_EQ(gy.to_vector(), (std::vector<double>{1, 1, 1}));
+  EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{2, 2, 2}));
+
+  Tensor a = Tensor::ones({2}, DType::F64), b = Tensor::ones({2}, DType::F64);
+  a.set_requires_grad();
+  b.set_requires_grad();
+  ops::add(a, b).backward(Tensor::ones({2}, DType::F64));  // both receive the same gradient
+  EXPECT_FALSE(a.grad().shares_storage(b.grad()));
+  ops::mul(a, a).backward(Tensor::ones({2}, DType::F64));
+  EXPECT_EQ(a.grad().to_vector(), (std::vector<double>{3, 3}));
+  EXPECT_EQ(b.grad().to_vector(), (std::vector<double>{1, 1}));
+}
+
 TEST(Autograd, SharedSubexpressionGetsSummedGradient) {
   Tensor x = Tensor::scalar(3.0, DType::F64);
   x.set_requires_grad();
