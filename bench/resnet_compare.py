@@ -46,18 +46,24 @@ def main():
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--warmup", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=1)
+    # Both sides get the same thread count. PyTorch's own default is the number of
+    # physical cores, 1 on this 2-vCPU machine, and with 1 thread it also routes 1x1
+    # convolutions at batch < 16 away from oneDNN to its BLAS path.
+    ap.add_argument("--threads", type=int, default=os.cpu_count())
     args = ap.parse_args()
     common = ["--arch", args.arch, "--batch", str(args.batch), "--size", str(args.size),
               "--steps", str(args.steps), "--warmup", str(args.warmup)]
     weft, torch = [], []
     for r in range(args.rounds):
-        weft.append(run([args.weft, "bench", "resnet"] + common))
-        torch.append(run([args.python, os.path.join(HERE, "resnet_torch_bench.py")] + common))
+        weft.append(run([args.weft, "--threads", str(args.threads), "bench", "resnet"] + common))
+        torch.append(run([args.python, os.path.join(HERE, "resnet_torch_bench.py"),
+                          "--threads", str(args.threads)] + common))
         print(f"round {r + 1}: weft train {weft[-1]['train_ms']:.1f} ms, infer "
               f"{weft[-1]['infer_ms']:.1f} ms | torch train {torch[-1]['train_ms']:.1f} ms, "
               f"infer {torch[-1]['infer_ms']:.1f} ms", flush=True)
     med = lambda rows, k: statistics.median(row[k] for row in rows)
-    print(f"\n{args.arch}, batch {args.batch}, {args.size}x{args.size}, median over "
+    print(f"\n{args.arch}, batch {args.batch}, {args.size}x{args.size}, {args.threads} threads, "
+          f"median over "
           f"{args.rounds} round(s) of {args.steps}-step medians")
     print(f"{'':12s}{'weft':>12s}{'PyTorch':>12s}{'PyTorch/weft':>14s}")
     for key, label in (("train_ms", "train ms"), ("infer_ms", "infer ms"),
