@@ -5,6 +5,7 @@
 
 #include "apps/commands.h"
 #include "graph/error.h"
+#include "graph/profiler.h"
 #include "graph/threads.h"
 
 int main(int argc, char** argv) {
@@ -26,6 +27,12 @@ int main(int argc, char** argv) {
   weft::apps::add_pose_command(app);
   weft::apps::add_nn_command(app);
   weft::apps::add_bench_command(app);
+  // WEFT_PROFILE=1: the per-op time table goes to stderr when the command ends.
+  struct ProfileAtExit {
+    ~ProfileAtExit() {
+      if (weft::profiling_enabled()) std::cerr << weft::profile_report();
+    }
+  } profile_at_exit;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
