@@ -9,6 +9,7 @@ void add_ops_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
 void add_pose_command(CLI::App& app);
+void add_character_command(CLI::App& app);
 void add_nn_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 

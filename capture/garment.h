@@ -1,0 +1,42 @@
+#pragma once
+// Garments generated around a body in its bind pose: a tube of rings (a skirt from the
+// waist, a dress from under the arms) whose radius, per angle and height, clears the
+// body by a margin and only grows downward (the cloth hangs; it never dips between the
+// legs). The top ring is the waistband: its vertices are the anchors tied to the body.
+#include <Eigen/Core>
+#include <vector>
+
+#include "capture/mesh.h"
+
+namespace weft::capture {
+
+struct TubeGarmentOptions {
+  double top_y = 0;        // height of the top ring (units)
+  double length = 0.5;     // from the top ring down to the hem (units)
+  double flare = 0.3;      // radius gained per unit of drop beyond what the body needs
+  double clearance = 0.01; // minimum distance to the body in the bind pose (units)
+  int segments = 64;       // vertices around each ring
+  int rings = 48;          // rings from top to hem (≥ 2)
+};
+
+struct TubeGarment {
+  TriangleMesh mesh;          // rings × segments vertices, outward-facing triangles
+  std::vector<int> anchors;   // the top ring (cloth vertex indices)
+  Eigen::Vector2d centre;     // the tube's axis (x, z)
+  double min_distance = 0;    // smallest unsigned distance to the body (units)
+  int inside = 0;             // garment vertices inside the body (0 when generation succeeded)
+};
+
+// `excluded` (per body vertex, may be empty) marks vertices the garment may ignore when it
+// sizes itself (the arms and hands: the skirt goes under the hands in the A-pose). The
+// axis passes through the centroid of the body's cross-section at top_y. After sizing,
+// every garment vertex closer than `clearance` to the non-excluded body is pushed
+// outward until it clears it. Deterministic.
+TubeGarment generate_tube_garment(const TriangleMesh& body, const std::vector<char>& excluded,
+                                  const TubeGarmentOptions& options);
+
+// Signed distance of each point to a closed body mesh: the distance to the closest
+// triangle, negative inside (generalised winding number). Multithreaded (TBB).
+Eigen::VectorXd signed_distances(const TriangleMesh& body, const Vertices& points);
+
+}  // namespace weft::capture
