@@ -4,7 +4,8 @@
 //   W = ½ k_b · 3‖ē‖² / (Ā₁ + Ā₂) · (θ − θ̄)²,
 // k_b the bending stiffness in N·m (J), ē the rest edge, Ā the rest areas of its two
 // triangles. θ's gradient and Hessian come from a second-order jet on the 9 edge vectors
-// (x1−x0, x2−x0, x3−x0); the 12×12 Hessian is projected to PSD in that 9D space.
+// (x1−x0, x2−x0, x3−x0). The Newton Hessian (projection on) is the Gauss-Newton term
+// 2w ∇θ∇θᵀ, PSD by construction; with the projection off it is the exact one.
 #include <vector>
 
 #include "physics/cloth_model.h"

@@ -24,6 +24,9 @@ CholmodSolver::CholmodSolver(const SparseHessian& pattern, CholeskyKind kind)
   s_->common.nmethods = 1;
   s_->common.method[0].ordering = CHOLMOD_AMD;
   s_->common.postorder = 1;
+  // LLᵀ also in the simplicial case: an LDLᵀ factorisation succeeds on indefinite
+  // matrices, and the Newton solver relies on failure to detect them.
+  s_->common.final_ll = 1;
   if (kind == CholeskyKind::simplicial) s_->common.supernodal = CHOLMOD_SIMPLICIAL;
   if (kind == CholeskyKind::supernodal) s_->common.supernodal = CHOLMOD_SUPERNODAL;
   const int n = pattern.rows();

@@ -40,6 +40,9 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
       std::vector<Energy*>{inertia_.get(), gravity_.get(), membrane_.get(), bending_.get(),
                            pins_.get(), rays_.get(), collision_.get()},
       settings_.newton);
+  // Convergence is judged per vertex against its weight under standard gravity (not the
+  // scene's gravity, which may be zero).
+  solver_->set_force_scale(kStandardGravity * mesh_.mass);
 }
 
 void ClothSimulator::set_pins(std::vector<int> vertices, std::vector<Vec3> targets) {

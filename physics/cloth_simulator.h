@@ -16,6 +16,9 @@
 
 namespace weft::physics {
 
+// g₀, m/s²: the weight m_i·g₀ is each vertex's force scale in Newton's convergence test.
+inline constexpr double kStandardGravity = 9.80665;
+
 struct SimulationSettings {
   double time_step = 0.01;  // seconds per frame
   int substeps = 1;         // implicit Euler steps per frame
@@ -26,12 +29,15 @@ struct SimulationSettings {
   double pin_stiffness = 1.0e4;        // N/m
   double constraint_stiffness = 1.0e2; // N/m, silhouette rays
   NewtonOptions newton;
-  // Per-element PSD projection of the membrane Hessian. Off by default: clamping every
-  // compressive mode slowed Newton to linear convergence on draping cloth (measured 40
-  // vs 10 iterations on a frame of a cloth falling on a sphere); the solver's adaptive
-  // regularisation handles the indefinite sum instead. Bending and collision Hessians
-  // are always projected.
-  bool project_membrane_hessian = true;
+  // Per-element PSD projection of the membrane Hessian (clamping compressive stress in
+  // its geometric term). Off by default: Newton then uses the exact membrane Hessian and
+  // falls back to the projected one only in iterations where the exact sum is not
+  // positive definite (MembraneEnergy::add_hessian_correction), which keeps quadratic
+  // convergence near the solution. Measured on the drape (1k vertices, 10 frames,
+  // tolerance 1e-3): always projected, 65 Newton iterations per frame and 7 steps
+  // unconverged at the cap; exact with fallback, 42 per frame, all converged.
+  // Bending and collision Hessians are always projected.
+  bool project_membrane_hessian = false;
 };
 // Throws weft::Error naming the field if a value is non-physical.
 void validate(const SimulationSettings& settings);

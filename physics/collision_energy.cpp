@@ -59,10 +59,14 @@ void CollisionEnergy::invalidate_cache() {
 double CollisionEnergy::add_penalty(int i, const DistanceSample& s, Eigen::VectorXd* g,
                                     SparseHessian* H) const {
   if (!(s.distance < thickness_)) return 0.0;
+  // E = k/(6δ)·gap³ with gap = δ − d: dE/dgap = k/(2δ)·gap², d²E/dgap² = k/δ·gap, and
+  // ∂gap/∂x = −∇d.
   const double gap = thickness_ - s.distance;
-  if (g) g->segment<3>(3 * i) -= k_ * gap * s.gradient;
+  const double c = k_ / thickness_;
+  const double de = 0.5 * c * gap * gap;
+  if (g) g->segment<3>(3 * i) -= de * s.gradient;
   if (H) {
-    Eigen::Matrix3d h = k_ * (s.gradient * s.gradient.transpose() - gap * s.hessian);
+    Eigen::Matrix3d h = c * gap * (s.gradient * s.gradient.transpose()) - de * s.hessian;
     if (project_hessian_) {
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(h);
       h = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
@@ -70,7 +74,7 @@ double CollisionEnergy::add_penalty(int i, const DistanceSample& s, Eigen::Vecto
     }
     H->add_diagonal_block(i, h);
   }
-  return 0.5 * k_ * gap * gap;
+  return c / 6.0 * gap * gap * gap;
 }
 
 double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
@@ -89,6 +93,33 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
     }
   }
   return energy;
+}
+
+double CollisionEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  double alpha = 1.0;
+  auto limit = [&](const DistanceSample& s, const Eigen::Vector3d& step) {
+    // Inside the band the penalty's own Hessian already shapes the Newton step.
+    if (!(s.distance >= thickness_)) return;
+    const double target = 0.5 * thickness_;
+    const double approach = -s.gradient.dot(step);
+    if (approach > 0 && s.distance - approach < target)
+      alpha = std::min(alpha, (s.distance - target) / approach);
+  };
+  for (int i = 0; i < n_; ++i) {
+    const Eigen::Vector3d xi = x.segment<3>(3 * i), step = dx.segment<3>(3 * i);
+    const double reach = step.norm();
+    for (const auto& sphere : spheres_) limit(signed_distance(sphere, xi), step);
+    for (size_t b = 0; b < bodies_.size(); ++b) {
+      CacheEntry& c = cache_[b][i];
+      // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
+      if (c.d_ref - (xi - c.x_ref).norm() - reach >= 0.5 * thickness_) continue;
+      const DistanceSample s = signed_distance(*bodies_[b], xi);
+      c.x_ref = xi;
+      c.d_ref = s.distance;
+      limit(s, step);
+    }
+  }
+  return alpha;
 }
 
 double CollisionEnergy::min_signed_distance(const Eigen::Vector3d& x) const {

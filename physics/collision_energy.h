@@ -1,8 +1,14 @@
 #pragma once
 // Collisions with obstacles (analytic spheres and body meshes) as a penalty on each cloth
 // vertex's signed distance d to each obstacle, active within the collision thickness δ:
-//   E = ½ k (δ − d)²  for d < δ, else 0;   k in N/m, δ in metres.
-// The per-vertex 3×3 Hessian k ∇d∇dᵀ − k (δ − d) ∇²d is projected to PSD.
+//   E = k/(6δ) · (δ − d)³  for d < δ, else 0;   k in N/m, δ in metres.
+// A cubic onset: force and stiffness both grow from zero at the band's edge (E is C²),
+// the stiffness reaches k at contact (d = 0), where the force is k·δ/2, and keeps growing
+// with penetration. The quadratic penalty ½k(δ − d)² used before was only C¹: its
+// stiffness jumped from 0 to k at d = δ, and since a resting vertex sits only
+// m·g/k ≈ 1e-7 m inside the band, Newton kept switching vertices in and out of the
+// active set and stalled on draping cloth.
+// The per-vertex 3×3 Hessian E''∇d∇dᵀ + E'∇²d is projected to PSD.
 #include <vector>
 
 #include "physics/body_mesh.h"
@@ -37,6 +43,13 @@ class CollisionEnergy : public Energy {
   std::string name() const override { return "collision"; }
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const override;
   void begin_step(const Eigen::VectorXd&) override { invalidate_cache(); }
+  // Step filter: a vertex outside the band may, to first order in the step, not come
+  // closer than half the thickness: d + α ∇d·dx ≥ δ/2 for d ≥ δ. Without it the first
+  // Newton step of a contact frame, blind to vertices still outside the band, sent them
+  // centimetres deep into the obstacle, and Newton spent many iterations pushing them
+  // out. Vertices in the band are left to the penalty's Hessian. (For a convex obstacle
+  // d is convex outside it and the first-order bound is conservative.)
+  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
   // Smallest signed distance of vertex i to any obstacle (metres; +inf without obstacles).
   double min_signed_distance(const Eigen::Vector3d& x) const;

@@ -21,6 +21,22 @@ class Energy {
                           SparseHessian* hessian) const = 0;
   // Vertex pairs this energy couples (off-diagonal blocks of its Hessian).
   virtual void add_pattern(std::vector<std::array<int, 2>>& pairs) const { (void)pairs; }
+  // Adds a PSD matrix C such that the energy's exact Hessian plus C is PSD, for energies
+  // whose exact Hessian (projection off) can be indefinite; returns false if it has none.
+  // The Newton solver uses the exact Hessian and adds C only when the sum is not
+  // positive definite.
+  virtual bool add_hessian_correction(const Eigen::VectorXd& x, SparseHessian& c) const {
+    (void)x;
+    (void)c;
+    return false;
+  }
+  // The largest α in (0, 1] this energy lets a step x + α·dx take (a filter applied before
+  // the line search, e.g. against passing through obstacles); 1 when unrestricted.
+  virtual double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+    (void)x;
+    (void)dx;
+    return 1.0;
+  }
   // Called once at the start of each time step, before any evaluate().
   virtual void begin_step(const Eigen::VectorXd& x_start) { (void)x_start; }
   // Element Hessians are projected to PSD unless this is switched off (for checking the

@@ -33,6 +33,29 @@ void MembraneEnergy::add_pattern(std::vector<std::array<int, 2>>& pairs) const {
     for (int a = 0; a < 3; ++a) pairs.push_back({el.v[a], el.v[(a + 1) % 3]});
 }
 
+bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHessian& c) const {
+  if (project_hessian_) return false;
+  using Mat32 = Eigen::Matrix<double, 3, 2>;
+  const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
+  for (const auto& el : elements_) {
+    Mat32 F = Mat32::Zero();
+    for (int a = 0; a < 3; ++a) F += x.segment<3>(3 * el.v[a]) * el.beta.row(a);
+    const Eigen::Matrix2d G = 0.5 * (F.transpose() * F - I);
+    const Eigen::Matrix2d S = 2.0 * mu_ * G + lambda_ * G.trace() * I;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
+    if (eig.eigenvalues()[0] >= 0) continue;  // in tension: the exact Hessian is PSD
+    const Eigen::Matrix2d s_neg = eig.eigenvectors() *
+                                  (-eig.eigenvalues().cwiseMin(0.0)).asDiagonal() *
+                                  eig.eigenvectors().transpose();
+    const Eigen::Matrix3d w = el.weight * el.beta * s_neg * el.beta.transpose();
+    Eigen::Matrix<double, 9, 9> hx = Eigen::Matrix<double, 9, 9>::Zero();
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) hx.block<3, 3>(3 * a, 3 * b).diagonal().setConstant(w(a, b));
+    c.add<3>(el.v, hx);
+  }
+  return true;
+}
+
 double MembraneEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
                                 SparseHessian* H) const {
   using Mat32 = Eigen::Matrix<double, 3, 2>;

@@ -25,9 +25,15 @@ enum class LinearSolverKind {
 
 struct NewtonOptions {
   int max_iterations = 50;
-  double tolerance = 1e-6;     // on ‖∇E‖∞, newtons
+  // Converged when every vertex's force residual is small next to its force scale:
+  //   max_i ‖∇_i E‖ / f_i ≤ tolerance,
+  // f_i from set_force_scale (the cloth simulator uses the vertex weight m_i·g₀, so the
+  // tolerance bounds the out-of-balance force as a fraction of each vertex's weight);
+  // f_i = 1 N when unset, and the tolerance is then in newtons.
+  double tolerance = 1e-3;
   double armijo = 1e-4;        // sufficient-decrease constant
   int max_backtracks = 40;
+  int max_expansions = 6;      // doublings of an accepted full step (α up to 2^6)
   LinearSolverKind linear_solver = LinearSolverKind::direct;
   CholeskyKind cholesky = CholeskyKind::automatic;  // CHOLMOD's choice by flop count
   int cg_max_iterations = 25;
@@ -38,8 +44,10 @@ struct NewtonReport {
   StepStatus status = StepStatus::max_iterations;
   int iterations = 0;
   double gradient_norm = 0;   // ‖∇E‖∞ at the returned x, N
+  double residual = 0;        // max_i ‖∇_i E‖ / f_i at the returned x (see tolerance)
   double energy = 0;          // J
   int factorizations = 0;
+  int corrections = 0;        // iterations that fell back to PSD-projected element Hessians
   int cg_iterations = 0;
   double regularization = 0;  // δ after the step, N/m
   std::vector<double> accepted_energies;  // E after each accepted iteration (first: start)
@@ -55,6 +63,10 @@ class NewtonSolver {
   // Energies are not owned and must outlive the solver.
   NewtonSolver(int num_vertices, std::vector<Energy*> energies, NewtonOptions options = {});
   NewtonReport minimize(Eigen::VectorXd& x);
+  // Per-vertex force scales f_i (N, > 0) of the convergence test; see NewtonOptions.
+  void set_force_scale(Eigen::VectorXd per_vertex);
+  // max_i ‖g_i‖ / f_i.
+  double residual(const Eigen::VectorXd& g) const;
 
   double energy(const Eigen::VectorXd& x) const;
   // Returns E and writes ∇E.
@@ -69,12 +81,14 @@ class NewtonSolver {
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
                   std::vector<double>* ms) const;
   // Direction d with (H + δI) d = −g; false if no descent direction was found.
-  bool direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
+  bool direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g, Eigen::VectorXd& d,
+                 NewtonReport& report);
   bool cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
 
   int n_;
   std::vector<Energy*> energies_;
   NewtonOptions options_;
+  Eigen::VectorXd inv_force_scale_;  // 1/f_i, n entries
   SparseHessian hessian_;
   std::unique_ptr<CholmodSolver> cholmod_;
   double delta_ = 0;

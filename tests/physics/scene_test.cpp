@@ -105,7 +105,7 @@ obstacles:
   - sphere: {center: [0.25, 0.7, 0.2], radius: 0.2}
   - mesh: floor.obj
 collision: {thickness: 0.01, stiffness: 1.0e4}
-solver: {max_iterations: 30, tolerance: 1.0e-7}
+solver: {max_iterations: 30, tolerance: 1.0e-4}
 )";
   const Scene scene = load_scene(write("scene.yaml", yaml));
   const fs::path out = dir_ / "out";
