@@ -1,12 +1,7 @@
 #include "nn/safetensors.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "graph/atomic_file.h"
 #include "graph/error.h"
 
 namespace weft::nn {
@@ -92,19 +88,6 @@ Entry parse_entry(const std::string& path, const std::string& name, const json& 
     bad("data_offsets [", e.begin, ", ", e.end, "] hold ", e.end - e.begin, " bytes but ",
         safetensors_dtype(e.dtype), " ", sh->dump(), " needs ", expected);
   return e;
-}
-
-void write_all(int fd, const void* data, size_t bytes, const std::string& tmp) {
-  const char* p = static_cast<const char*>(data);
-  while (bytes > 0) {
-    const ssize_t n = ::write(fd, p, bytes);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("safetensors: cannot write '", tmp, "': ", std::strerror(errno));
-    }
-    p += n;
-    bytes -= static_cast<size_t>(n);
-  }
 }
 
 }  // namespace
@@ -210,39 +193,12 @@ void save_safetensors(const std::string& path, const TensorMap& tensors,
   unsigned char len_bytes[8];
   for (int i = 0; i < 8; ++i) len_bytes[i] = static_cast<unsigned char>(text.size() >> (8 * i));
 
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::string tmp = (dir / ("." + target.filename().string() + ".tmp.XXXXXX")).string();
-  const int fd = ::mkstemp(tmp.data());
-  if (fd < 0)
-    fail("safetensors: cannot create a temporary file beside '", path, "': ",
-         std::strerror(errno));
-  bool closed = false;
-  try {
-    write_all(fd, len_bytes, 8, tmp);
-    write_all(fd, text.data(), text.size(), tmp);
-    for (const auto& [name, t] : tensors) write_all(fd, t.raw_data(), t.nbytes(), tmp);
-    if (::fsync(fd) != 0) fail("safetensors: cannot fsync '", tmp, "': ", std::strerror(errno));
-    ::fchmod(fd, 0644);
-    closed = true;
-    if (::close(fd) != 0) fail("safetensors: cannot close '", tmp, "': ", std::strerror(errno));
-  } catch (...) {
-    if (!closed) ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    fail("safetensors: cannot rename '", tmp, "' to '", path, "': ", std::strerror(err));
-  }
-  // Make the rename itself durable.
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
+  write_file_atomically(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(len_bytes), 8);
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    for (const auto& [name, t] : tensors)
+      out.write(static_cast<const char*>(t.raw_data()), static_cast<std::streamsize>(t.nbytes()));
+  });
 }
 
 const Tensor& require_tensor(const SafetensorsFile& file, const std::string& path,
