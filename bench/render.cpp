@@ -55,7 +55,7 @@ std::vector<int> int_list(const std::string& s) {
 }
 
 // A latitude–longitude sphere of radius 1 m (in mm) with smoothly varying colours:
-// 71 rings × 72 segments = 10,080 triangles.
+// 71 rings × 72 segments, two triangles per cell except at the poles: 10,080 triangles.
 TriangleMesh sphere_mesh() {
   const int rings = 71, segments = 72;
   TriangleMesh m;
@@ -73,8 +73,8 @@ TriangleMesh sphere_mesh() {
   for (int i = 0; i < rings; ++i)
     for (int j = 0; j < segments; ++j) {
       const int a = i * (segments + 1) + j, b = a + 1, c = a + segments + 1, d = c + 1;
-      faces.emplace_back(a, c, b);
-      faces.emplace_back(b, c, d);
+      if (i > 0) faces.emplace_back(a, c, b);  // the other one is degenerate at the pole
+      if (i < rings - 1) faces.emplace_back(b, c, d);
     }
   m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
   for (size_t f = 0; f < faces.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = faces[f];

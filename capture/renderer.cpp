@@ -370,13 +370,22 @@ RenderResult render(const Camera& camera, const std::vector<RenderMesh>& meshes,
 
   RenderResult r;
   r.rgb.create(H, W, CV_8UC3);
-  r.mask = cv::Mat::zeros(H, W, CV_8UC1);
-  r.parts = cv::Mat::zeros(H, W, CV_8UC1);
-  r.depth = cv::Mat::zeros(H, W, CV_32FC1);
-  const cv::Mat background = background_image(options.background, W, H);
+  r.mask.create(H, W, CV_8UC1);
+  r.parts.create(H, W, CV_8UC1);
+  r.depth.create(H, W, CV_32FC1);
+  // A solid background needs no image of its own, only its colour.
+  const cv::Scalar& colour = options.background.color;
+  const cv::Vec3b solid(cv::saturate_cast<uchar>(colour[0]), cv::saturate_cast<uchar>(colour[1]),
+                        cv::saturate_cast<uchar>(colour[2]));
+  const cv::Mat background = options.background.kind == BackgroundKind::solid
+                                 ? cv::Mat()
+                                 : background_image(options.background, W, H);
   const Shader shader(camera, shading, tris, options.lighting);
   const int centre = (s - 1) / 2;
   const double inv_samples = 1.0 / (s * s);
+  auto to_bgr = [](const Eigen::Vector3d& c) {
+    return cv::Vec3b(cv::saturate_cast<uchar>(c(0)), cv::saturate_cast<uchar>(c(1)), cv::saturate_cast<uchar>(c(2)));
+  };
 
   tbb::enumerable_thread_specific<BandBuffers> buffers;
   tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
@@ -385,33 +394,34 @@ RenderResult render(const Camera& camera, const std::vector<RenderMesh>& meshes,
       const int row0 = band * band_samples, row1 = std::min(row0 + band_samples, Hs);
       rasterise_band(tris, bins[band], row0, row1, Ws, buf);
       for (int y = row0 / s; y < row1 / s; ++y) {
-        const cv::Vec3b* bg = background.ptr<cv::Vec3b>(y);
+        const cv::Vec3b* bg = background.empty() ? nullptr : background.ptr<cv::Vec3b>(y);
         cv::Vec3b* rgb = r.rgb.ptr<cv::Vec3b>(y);
         uchar* mask = r.mask.ptr<uchar>(y);
         uchar* parts = r.parts.ptr<uchar>(y);
         float* depth = r.depth.ptr<float>(y);
+        const size_t centre_row = static_cast<size_t>(y * s + centre - row0) * Ws + centre;
         for (int x = 0; x < W; ++x) {
+          // The centre sample is the pixel centre: it alone decides mask, parts and depth.
+          const size_t c = centre_row + static_cast<size_t>(x) * s;
+          const int id = buf.triangle[c];
+          mask[x] = id < 0 ? 0 : 255;
+          parts[x] = id < 0 ? 0 : static_cast<uchar>(meshes[tris[id].mesh].part);
+          depth[x] = id < 0 ? 0.0f : static_cast<float>(1.0 / buf.inv_z[c]);
+          const cv::Vec3b back = bg ? bg[x] : solid;
+          if (s == 1) {
+            rgb[x] = id < 0 ? back : to_bgr(shader.shade(id, buf.b1[c], buf.b2[c]));
+            continue;
+          }
           Eigen::Vector3d sum = Eigen::Vector3d::Zero();
           for (int sy = 0; sy < s; ++sy) {
-            const size_t row = static_cast<size_t>(y * s + sy - row0) * Ws;
+            const size_t row = static_cast<size_t>(y * s + sy - row0) * Ws + static_cast<size_t>(x) * s;
             for (int sx = 0; sx < s; ++sx) {
-              const size_t idx = row + x * s + sx;
-              const int id = buf.triangle[idx];
-              if (id < 0) {
-                sum += Eigen::Vector3d(bg[x][0], bg[x][1], bg[x][2]);
-                continue;
-              }
-              sum += shader.shade(id, buf.b1[idx], buf.b2[idx]);
-              if (sy == centre && sx == centre) {
-                mask[x] = 255;
-                parts[x] = static_cast<uchar>(meshes[tris[id].mesh].part);
-                depth[x] = static_cast<float>(1.0 / buf.inv_z[idx]);
-              }
+              const int sid = buf.triangle[row + sx];
+              sum += sid < 0 ? Eigen::Vector3d(back[0], back[1], back[2])
+                             : shader.shade(sid, buf.b1[row + sx], buf.b2[row + sx]);
             }
           }
-          sum *= inv_samples;
-          rgb[x] = cv::Vec3b(cv::saturate_cast<uchar>(sum(0)), cv::saturate_cast<uchar>(sum(1)),
-                             cv::saturate_cast<uchar>(sum(2)));
+          rgb[x] = to_bgr(sum * inv_samples);
         }
       }
     }
