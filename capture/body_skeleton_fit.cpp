@@ -681,4 +681,35 @@ BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_
   return fit;
 }
 
+std::vector<char> arm_vertices(const TriangleMesh& body, const BodySkeletonFit& fit) {
+  const double step = 0.002 * fit.height;
+  const double y0 = fit.crotch_y, y1 = fit.armpit_y;
+  // Torso extent across (x) per height bin; arms are the sections beside it.
+  const int bins = std::max(1, static_cast<int>(std::ceil((y1 - y0) / step)));
+  std::vector<double> lo(bins), hi(bins);
+  for (int b = 0; b < bins; ++b) {
+    const double y = y0 + (b + 0.5) * (y1 - y0) / bins;
+    lo[b] = -std::numeric_limits<double>::infinity(), hi[b] = -lo[b];
+    for (const Section& s : slice_mesh(body, Vector3d::UnitY(), y))
+      if (s.lo.x() < 0 && s.hi.x() > 0) lo[b] = s.lo.x(), hi[b] = s.hi.x();
+  }
+  std::vector<char> arm(body.num_vertices(), 0);
+  for (const double sign : {1.0, -1.0}) {
+    const std::string p = sign > 0 ? "l_" : "r_";
+    const Vector3d sh = fit.joints.at(p + "shoulder");
+    const Vector3d u = (fit.joints.at(p + "elbow") - sh).normalized();
+    for (int v = 0; v < body.num_vertices(); ++v) {
+      const Vector3d q = body.V.row(v).transpose();
+      if (q.x() * sign <= 0 || q.y() < y0) continue;
+      if (q.y() >= y1) {
+        arm[v] = (q - sh).dot(u) > 0;
+      } else {
+        const int b = std::clamp(static_cast<int>((q.y() - y0) / (y1 - y0) * bins), 0, bins - 1);
+        arm[v] = q.x() > hi[b] || q.x() < lo[b];
+      }
+    }
+  }
+  return arm;
+}
+
 }  // namespace weft::capture

@@ -83,6 +83,12 @@ struct BodySkeletonFit {
 BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_points,
                                   const std::string& what);
 
+// Arm and hand vertices (1) by geometry: between the crotch and the armpits, vertices
+// outside the torso's cross-section at their height; above the armpits, vertices beyond
+// the plane through the shoulder joint perpendicular to the upper arm. Below the crotch
+// there are none (the hands of an A-pose end above it).
+std::vector<char> arm_vertices(const TriangleMesh& body, const BodySkeletonFit& fit);
+
 // The Skeleton for joint positions (names as above): root hips = 3 prismatic + 3 revolute
 // joints; ball joints = revolute rx, ry, rz with zero offsets between them; knees, elbows
 // and toes = one limited revolute hinge; end sites = revolute joints no dof drives. Each

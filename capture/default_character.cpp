@@ -166,14 +166,9 @@ DefaultCharacter make_default_character(const DefaultCharacterConfig& cfg) {
   body.graph = sample_embedded_graph(body.mesh, go);
   body.graph.rigidity = Eigen::VectorXd::Ones(body.graph.num_nodes());
 
-  // Arms: vertices whose largest weight is a shoulder, elbow or wrist joint (upper arm,
-  // forearm, hand). Their faces are left out of collisions and out of garment sizing.
-  std::set<int> arm_joints;
-  for (const std::string side : {"l_", "r_"})
-    for (const char* n : {"shoulder", "elbow", "wrist"}) arm_joints.insert(ch.skeleton.joint_index(side + n));
-  out.arm_vertices.assign(body.mesh.num_vertices(), 0);
-  for (int v = 0; v < body.mesh.num_vertices(); ++v)
-    out.arm_vertices[v] = arm_joints.count(body.weights.vertices[v][0].joint) ? 1 : 0;
+  // Arms and hands (by geometry): their faces are left out of collisions, and garments
+  // are sized without them.
+  out.arm_vertices = arm_vertices(body.mesh, out.fit);
   for (int f = 0; f < body.mesh.num_faces(); ++f)
     if (out.arm_vertices[body.mesh.F(f, 0)] && out.arm_vertices[body.mesh.F(f, 1)] && out.arm_vertices[body.mesh.F(f, 2)])
       ch.inactive_body_faces.push_back(f);

@@ -43,7 +43,7 @@ struct DefaultCharacter {
   Character character;        // complete: skeleton, body, cloth, attachment, BODY_25
   BodySkeletonFit fit;        // the fitted joint positions and landmark heights
   LoadedBody loaded;          // the source mesh as read (file vertex count and height)
-  std::vector<char> arm_vertices;  // body vertices whose largest weight is an arm joint
+  std::vector<char> arm_vertices;  // arm and hand vertices (arm_vertices in body_skeleton_fit.h)
   double garment_min_distance = 0;  // garment to body in the bind pose (metres)
   int garment_inside = 0;           // garment vertices inside the body (0 expected)
 };
