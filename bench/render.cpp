@@ -1,7 +1,7 @@
 // Synthetic studio renderer speed: milliseconds per rendered view (shaded RGB, mask,
 // parts, depth) of
 //   ddc:      the ddc body (5,514 vertices, 11,024 triangles, textured with ddc.png) in its
-//             bind pose, front view, green screen; read through configs/characters/ddc.yaml
+//             bind pose, seen from the front, green screen; read through configs/characters/ddc.yaml
 //             when ../shared/data/ddc exists, skipped otherwise;
 //   ddc+clutter: the same over a cluttered background generated per view (seeded);
 //   sphere:   a 10,080-triangle sphere with per-vertex colours, green screen;
@@ -9,7 +9,8 @@
 // Also the distance transform of the ddc (or sphere) mask. Medians over the repeats
 // after a warm-up.
 //
-//   bench_render [--repeats 15] [--sizes 512,1024] [--threads 1,2] [--supersample 1]
+//   bench_render [--repeats 15] [--sizes 512,1024] [--threads 1,2] [--supersample 1] [--out DIR]
+// --out also writes each scene's last view (rgb, mask, parts, distance transform) as PNG.
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -81,8 +82,8 @@ TriangleMesh sphere_mesh() {
   return m;
 }
 
-// A front view (from −z, y up) of the vertices' bounding box: its height fills 80 % of
-// a square image of `size` pixels from 3 heights away.
+// A view from +z (ddc's face; y up) of the vertices' bounding box: its height fills 80 %
+// of a square image of `size` pixels from 3 heights away.
 Camera front_camera(const Vertices& V, int size) {
   const Eigen::RowVector3d lo = V.colwise().minCoeff(), hi = V.colwise().maxCoeff();
   const Eigen::Vector3d centre = (0.5 * (lo + hi)).transpose();
@@ -91,8 +92,8 @@ Camera front_camera(const Vertices& V, int size) {
   c.name = "front";
   const double f = 0.8 * size * distance / height;
   c.K << f, 0, 0.5 * (size - 1), 0, f, 0.5 * (size - 1), 0, 0, 1;
-  c.R << -1, 0, 0, 0, -1, 0, 0, 0, 1;  // camera x = −world x, y = −world y (down), z = world z
-  c.t = -c.R * (centre - Eigen::Vector3d(0, 0, distance));
+  c.R << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // camera x = world x, y = −world y (down), z = −world z
+  c.t = -c.R * (centre + Eigen::Vector3d(0, 0, distance));
   c.width = c.height = size;
   return c;
 }
@@ -109,6 +110,7 @@ struct Scene {
 
 int main(int argc, char** argv) {
   int repeats = 15, supersample = 1;
+  std::string out_dir;
   std::vector<int> sizes{512, 1024}, threads{1, 2};
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
@@ -116,9 +118,10 @@ int main(int argc, char** argv) {
     else if (a == "--sizes") sizes = int_list(v);
     else if (a == "--threads") threads = int_list(v);
     else if (a == "--supersample") supersample = std::atoi(v.c_str());
+    else if (a == "--out") out_dir = v;
     else {
       std::fprintf(stderr, "unknown option %s\nusage: bench_render [--repeats 15] [--sizes 512,1024] "
-                           "[--threads 1,2] [--supersample 1]\n", a.c_str());
+                           "[--threads 1,2] [--supersample 1] [--out DIR]\n", a.c_str());
       return 2;
     }
   }
@@ -173,6 +176,16 @@ int main(int argc, char** argv) {
           ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
         }
         const double m = median(ms);
+        if (!out_dir.empty()) {
+          std::filesystem::create_directories(out_dir);
+          const std::string stem = out_dir + "/" + s.name + "_" + std::to_string(size);
+          cv::Mat dt;
+          cv::normalize(distance_transform(r.mask), dt, 0, 255, cv::NORM_MINMAX, CV_8U);
+          cv::imwrite(stem + "_rgb.png", r.rgb);
+          cv::imwrite(stem + "_mask.png", r.mask);
+          cv::imwrite(stem + "_parts.png", r.parts * 100);
+          cv::imwrite(stem + "_dt.png", dt);
+        }
         std::printf("%-12s %5d %4dx%-4d %8.1f%% %7d | %9.2f %8.1f\n", s.name.c_str(), s.triangles, size, size,
                     100.0 * cv::countNonZero(r.mask) / (double(size) * size), t, m, 1000 / m);
       }
