@@ -121,10 +121,14 @@ int main(int argc, char** argv) {
   }
   std::printf("scene %s solver %s vertices %d triangles %zu frames %d\n", scene.c_str(),
               solver.c_str(), mesh.num_vertices(), mesh.triangles.size(), frames);
+  std::printf("cholesky %s: nnz(L) %.3g, %.3g flop per factorisation\n",
+              sim.solver().cholmod().supernodal() ? "supernodal" : "simplicial",
+              sim.solver().cholmod().factor_nonzeros(), sim.solver().cholmod().factor_flops());
   Positions x = mesh.rest, v = Positions::Zero(x.size());
   std::vector<double> frame_ms, frame_cpu_ms, iters;
   double lin = 0, coll = 0, energy = 0, total = 0;
   int failed = 0;
+  long factorizations = 0, cg_iterations = 0;
   for (int f = 0; f < frames; ++f) {
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = cpu_ms();
@@ -142,6 +146,8 @@ int main(int argc, char** argv) {
       }
       const NewtonReport r = sim.advance(x, v, s.time_step);
       it += r.iterations;
+      factorizations += r.factorizations;
+      cg_iterations += r.cg_iterations;
       failed += r.status != StepStatus::converged;
       lin += r.linear_solve_ms;
       coll += r.energy_ms.back();  // the collision energy is last
@@ -164,9 +170,10 @@ int main(int argc, char** argv) {
   std::printf(
       "SUMMARY scene=%s solver=%s vertices=%d median_frame_ms=%.1f median_frame_cpu_ms=%.1f "
       "median_newton_per_frame=%.0f mean_newton_per_frame=%.1f "
+      "factorizations_per_frame=%.1f cg_per_frame=%.1f "
       "linear_solve=%.0f%% collision=%.0f%% energies_assembly=%.0f%% non_converged_steps=%d\n",
       scene.c_str(), solver.c_str(), mesh.num_vertices(), median(frame_ms), median(frame_cpu_ms),
-      median(iters), mean_it,
+      median(iters), mean_it, double(factorizations) / frames, double(cg_iterations) / frames,
       100 * lin / total, 100 * coll / total, 100 * energy / total, failed);
   return 0;
 }

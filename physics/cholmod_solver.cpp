@@ -43,6 +43,10 @@ CholmodSolver::CholmodSolver(const SparseHessian& pattern, CholeskyKind kind)
              ")");
 }
 
+double CholmodSolver::factor_nonzeros() const { return s_->common.lnz; }
+double CholmodSolver::factor_flops() const { return s_->common.fl; }
+bool CholmodSolver::supernodal() const { return s_->l->is_super; }
+
 CholmodSolver::~CholmodSolver() {
   if (s_->l) cholmod_free_factor(&s_->l, &s_->common);
   if (s_->a) cholmod_free_sparse(&s_->a, &s_->common);

@@ -26,6 +26,11 @@ class CholmodSolver {
   // Solves with the last successful factorisation.
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   bool has_factor() const { return factored_; }
+  // From the symbolic analysis: nonzeros of L, flops of one numeric factorisation, and
+  // whether CHOLMOD chose (or was told to use) the supernodal method.
+  double factor_nonzeros() const;
+  double factor_flops() const;
+  bool supernodal() const;
 
  private:
   struct State;

@@ -75,6 +75,7 @@ class NewtonSolver {
   const SparseHessian& hessian(const Eigen::VectorXd& x);
 
   NewtonOptions& options() { return options_; }
+  const CholmodSolver& cholmod() const { return *cholmod_; }
   const std::vector<Energy*>& energies() const { return energies_; }
 
  private:
