@@ -129,11 +129,15 @@ TubeGarment generate_tube_garment(const TriangleMesh& body, const std::vector<ch
   // Push vertices that are too close to the kept body straight outward (a few rounds).
   const TriangleMesh kept = kept_part(body, excluded);
   const ClosestTriangleQuery query(kept.V, kept.F);
+  Eigen::VectorXd dist(m.num_vertices());
   for (int round = 0; round < 8; ++round) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, m.num_vertices()), [&](const auto& r) {
+      for (int v = r.begin(); v != r.end(); ++v) dist(v) = query.closest(m.V.row(v).transpose()).distance;
+    });
     int moved = 0;
     for (int v = 0; v < m.num_vertices(); ++v) {
       const Vector3d p = m.V.row(v).transpose();
-      const double d = query.closest(p).distance;
+      const double d = dist(v);
       if (d >= o.clearance) continue;
       Eigen::Vector2d dir(p.x() - g.centre.x(), p.z() - g.centre.y());
       dir.normalize();
