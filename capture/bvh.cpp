@@ -301,13 +301,27 @@ std::string format_bvh(const BvhMotion& m) {
   std::string out = "HIERARCHY\n";
   for (size_t j = 0; j < m.joints.size(); ++j)
     if (m.joints[j].parent < 0) write_joint(m, children, static_cast<int>(j), 0, out);
+  // A reader assigns channel columns in the order the hierarchy is written (depth first),
+  // which need not be the order of m.joints: write each frame's values in that order.
+  std::vector<int> columns;
+  std::vector<int> stack;
+  for (size_t j = m.joints.size(); j-- > 0;)
+    if (m.joints[j].parent < 0) stack.push_back(static_cast<int>(j));
+  while (!stack.empty()) {
+    const int j = stack.back();
+    stack.pop_back();
+    for (size_t k = 0; k < m.joints[j].channels.size(); ++k) columns.push_back(m.joints[j].first_channel + static_cast<int>(k));
+    for (auto c = children[j].rbegin(); c != children[j].rend(); ++c) stack.push_back(*c);
+  }
+  if (static_cast<int>(columns.size()) != m.num_channels())
+    fail(display_name(m.source), ": ", columns.size(), " joint channels for ", m.num_channels(), " frame columns");
   char buf[64];
   out += "MOTION\nFrames: " + std::to_string(m.num_frames()) + "\n";
   std::snprintf(buf, sizeof(buf), "Frame Time: %.10g\n", m.frame_time_s);
   out += buf;
   for (int f = 0; f < m.num_frames(); ++f) {
-    for (int c = 0; c < m.num_channels(); ++c) {
-      std::snprintf(buf, sizeof(buf), c == 0 ? "%.10g" : " %.10g", m.frames(f, c));
+    for (size_t c = 0; c < columns.size(); ++c) {
+      std::snprintf(buf, sizeof(buf), c == 0 ? "%.10g" : " %.10g", m.frames(f, columns[c]));
       out += buf;
     }
     out += "\n";

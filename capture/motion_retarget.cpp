@@ -257,6 +257,21 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / std::numbers::pi;
 }
 
+// A bone's target direction from source positions (character axes): the source's
+// direction, its elevation above the horizontal shifted by the bone's offset.
+Eigen::Vector3d target_direction(const std::vector<Eigen::Vector3d>& p, const RetargetBone& b, int up) {
+  Eigen::Vector3d u = p[b.source_to] - p[b.source_from];
+  u /= std::max(u.norm(), 1e-300);
+  if (b.elevation_offset == 0) return u;
+  Eigen::Vector3d h = u;
+  h(up) = 0;
+  if (h.norm() < 1e-9) return u;  // vertical: no heading to keep
+  const double elevation = std::asin(std::clamp(u(up), -1.0, 1.0)) + b.elevation_offset;
+  Eigen::Vector3d out = std::cos(elevation) * h.normalized();
+  out(up) += std::sin(elevation);
+  return out;
+}
+
 // Source positions of the joints we use (metres, character axes) at time t.
 std::vector<Eigen::Vector3d> source_positions(const BvhMotion& motion, const RetargetMapping& m, double t) {
   const BvhTransforms G = bvh_global_transforms_at(motion, t);
@@ -301,6 +316,8 @@ Resolved resolve(const BvhMotion& motion, const RetargetMapping& m, const Skelet
   };
   for (const auto& [n, w] : m.bone_weights)
     if (target_of[source_joint(motion, m, n)] < 0) fail(file, ": bone_weights: '", n, "' is not a mapped joint");
+  for (const std::string& n : m.rest_elevation)
+    if (target_of[source_joint(motion, m, n)] < 0) fail(file, ": rest_elevation: '", n, "' is not a mapped joint");
   for (int a : r.source_mapped) {
     int p = motion.joints[a].parent;
     while (p >= 0 && target_of[p] < 0) p = motion.joints[p].parent;
@@ -341,7 +358,7 @@ RetargetMapping parse_retarget_mapping(const std::string& text, const std::strin
   m.file = name;
   try {
     y.check_keys(root, "", {"source_units_m", "source_axes", "up", "joints", "bone_weights", "extra_bones",
-                            "root", "source_floor", "fixed_dofs", "solver"});
+                            "rest_elevation", "root", "source_floor", "fixed_dofs", "solver"});
     if (root["source_units_m"]) m.source_metres_per_unit = y.positive(root["source_units_m"], "source_units_m");
     if (root["source_axes"]) m.source_to_target = parse_axes(y, root["source_axes"]);
     if (root["up"]) {
@@ -376,6 +393,7 @@ RetargetMapping parse_retarget_mapping(const std::string& text, const std::strin
         m.extra_bones.push_back(spec);
       }
     }
+    if (root["rest_elevation"]) m.rest_elevation = y.strings(root["rest_elevation"], "rest_elevation");
     const YAML::Node r = root["root"];
     if (!r) y.fail_at(root, "root", "missing key (root: {joints: [...]})");
     y.check_keys(r, "root", {"joints", "weight", "scale", "vertical", "horizontal"});
@@ -435,7 +453,7 @@ Eigen::VectorXd bone_direction_errors_deg(const BvhMotion& motion, const Retarge
   const Transforms G = forward_kinematics(s, dofs);
   Eigen::VectorXd e(bones.size());
   for (size_t b = 0; b < bones.size(); ++b)
-    e(b) = angle_deg(p[bones[b].source_to] - p[bones[b].source_from],
+    e(b) = angle_deg(target_direction(p, bones[b], m.up_axis),
                      G[bones[b].target_to].translation() - G[bones[b].target_from].translation());
   return e;
 }
@@ -482,9 +500,17 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
   }
   RetargetResult out;
   out.fps = fps;
-  out.bones = res.bones;
   out.root_scale = m.root_scale > 0 ? m.root_scale : target_length / source_length;
   const double k = out.root_scale;
+  std::vector<RetargetBone> bones = res.bones;
+  for (RetargetBone& b : bones) {
+    const std::string& end = motion.joints[b.source_to].name;
+    if (std::find(m.rest_elevation.begin(), m.rest_elevation.end(), end) == m.rest_elevation.end()) continue;
+    const Eigen::Vector3d ds = (m.source_to_target * (zero[b.source_to].translation() - zero[b.source_from].translation())).normalized();
+    const Eigen::Vector3d dc = (rest[b.target_to].translation() - rest[b.target_from].translation()).normalized();
+    b.elevation_offset = std::asin(std::clamp(dc(up), -1.0, 1.0)) - std::asin(std::clamp(ds(up), -1.0, 1.0));
+  }
+  out.bones = bones;
 
   // Source joint positions per output frame (metres, character axes).
   std::vector<std::vector<Eigen::Vector3d>> src(F);
@@ -513,6 +539,8 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
   }
   double target_floor = std::numeric_limits<double>::infinity();
   for (int b : res.target_mapped) target_floor = std::min(target_floor, rest[b].translation()(up));
+  out.source_floor_m = source_floor_m;
+  out.target_floor = target_floor;
   Eigen::Vector3d target_root_rest = Eigen::Vector3d::Zero();
   for (int b : res.target_root) target_root_rest += rest[b].translation();
   target_root_rest /= static_cast<double>(res.target_root.size());
@@ -525,7 +553,7 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
 
   // Root residuals are divided by the mean bone length: comparable to direction residuals.
   const double mean_bone = target_length_units / static_cast<double>(res.bones.size());
-  Solver solver(s, res.bones, res.target_root, m.root_weight, mean_bone, m);
+  Solver solver(s, bones, res.target_root, m.root_weight, mean_bone, m);
   out.solved_dofs = solver.observable_dofs(m.fixed_dofs);
   // For the first frame, the root's own dofs first (translations and the rotations above
   // every mapped joint): the character may face anywhere relative to the source.
@@ -544,10 +572,7 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
   Eigen::VectorXd q = clamp_to_limits(s, rest_dofs);
   for (int f = 0; f < F; ++f) {
     Targets t;
-    for (const RetargetBone& b : res.bones) {
-      const Eigen::Vector3d v = src[f][b.source_to] - src[f][b.source_from];
-      t.directions.push_back(v / std::max(v.norm(), 1e-300));
-    }
+    for (const RetargetBone& b : bones) t.directions.push_back(target_direction(src[f], b, up));
     const Eigen::Vector3d ps = source_root(f);
     for (int i = 0; i < 3; ++i) {
       if (i == up) {
@@ -565,14 +590,23 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
     } else {
       solver.solve(q, t, out.solved_dofs, previous, rest_dofs, m.iterations);
     }
+    if (m.root_on_floor) {
+      // Feet: the character's lowest mapped joint goes where the source's is (scaled),
+      // whatever the two skeletons' leg proportions; the hip-height target alone leaves
+      // a character with relatively shorter legs floating. Only the root height moves.
+      const Transforms G0 = forward_kinematics(s, q);
+      double low = std::numeric_limits<double>::infinity();
+      for (int b : res.target_mapped) low = std::min(low, G0[b].translation()(up));
+      t.root(up) += target_floor + k * (lowest_mapped(src[f]) - source_floor_m) / metres_per_unit - low;
+      solver.solve(q, t, out.solved_dofs, previous, rest_dofs, m.iterations);
+    }
     out.motion.dofs.row(f) = q.transpose();
     out.motion.frame_ids[f] = f;
     const Transforms G = forward_kinematics(s, q);
     double sum = 0;
-    for (size_t b = 0; b < res.bones.size(); ++b)
-      sum += angle_deg(t.directions[b],
-                       G[res.bones[b].target_to].translation() - G[res.bones[b].target_from].translation());
-    out.direction_error_deg(f) = sum / static_cast<double>(res.bones.size());
+    for (size_t b = 0; b < bones.size(); ++b)
+      sum += angle_deg(t.directions[b], G[bones[b].target_to].translation() - G[bones[b].target_from].translation());
+    out.direction_error_deg(f) = sum / static_cast<double>(bones.size());
     Eigen::Vector3d root = Eigen::Vector3d::Zero();
     for (int b : res.target_root) root += G[b].translation();
     out.root_error(f) = (root / static_cast<double>(res.target_root.size()) - t.root).norm();

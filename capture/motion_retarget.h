@@ -6,8 +6,8 @@
 // join any two mapped joints (e.g. the two hips: the pelvis' side-to-side direction).
 // Per output frame, the source's bone directions (after the axis conversion) are targets
 // for the character's matching bones, and the mean of the root joints is a position
-// target (scaled by the size ratio of the two skeletons and set on the character's
-// floor). A damped least-squares (Levenberg–Marquardt) solve over the character's dofs
+// target (scaled by the size ratio of the two skeletons; vertically, it is then moved so
+// that the character's lowest mapped joint is as high above its floor as the source's). A damped least-squares (Levenberg–Marquardt) solve over the character's dofs
 // meets them, with analytic Jacobians of the 1-dof chains, dof limits respected by
 // projection, a weak pull toward the previous frame (it fixes what directions leave
 // free, e.g. a straight arm's twist) and warm starts from the previous frame.
@@ -43,6 +43,11 @@ struct RetargetMapping {
   std::vector<std::pair<std::string, std::string>> joints;
   std::vector<std::pair<std::string, double>> bone_weights;  // by the bone's source end joint
   std::vector<RetargetBoneSpec> extra_bones;
+  // Bones (by their source end joint) that keep the character's rest elevation relative
+  // to the source's zero pose: where the two skeletons put a joint differently (ddc's
+  // ankle sits higher above its toes than CMU's), matching the feet's directions exactly
+  // would tilt the character's feet and sink its heels when the source stands flat.
+  std::vector<std::string> rest_elevation;
   // Root position target: the mean of these source joints, matched to the mean of their
   // mapped character joints.
   std::vector<std::string> root_joints;
@@ -77,6 +82,7 @@ struct RetargetBone {
   int source_from = -1, source_to = -1;  // BVH joint indices
   int target_from = -1, target_to = -1;  // character joint indices
   double weight = 1.0;
+  double elevation_offset = 0;           // radians added to the source's elevation
 };
 
 struct RetargetResult {
@@ -90,6 +96,8 @@ struct RetargetResult {
   double root_scale = 1;                // character size / source size
   double source_height_m = 0;           // standing height of the source's mapped joints, first frame
   double target_height = 0;             // rest height of the character's mapped joints (units)
+  double source_floor_m = 0;            // height of the source's lowest mapped joint when standing
+  double target_floor = 0;              // the character's lowest mapped joint at rest (units)
 };
 
 // Retargets `motion` onto `skeleton`, whose rest pose `rest_dofs` is standing upright on
