@@ -549,8 +549,9 @@ BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_
     arm.push_back(a.centroid);
     for (double y = fit.armpit_y - 2 * step; y > 0.2 * H; y -= step) {
       Section next;
+      // Each section must continue the last one (within 0.03 H): the thigh, far inside
+      // the hand, never qualifies, and the arm ends below the finger tips.
       if (!fx.side_section(y, sign, arm.back(), 0.03 * H, next)) break;
-      // Stop at the thigh: a section much closer to the midline than the arm's last.
       arm.push_back(next.centroid);
     }
     if (arm.size() < 20) fail(what, ": the ", p, "arm is too short to fit (", arm.size(), " sections)");
