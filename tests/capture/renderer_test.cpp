@@ -140,6 +140,39 @@ cv::Mat opencv_silhouette(const Camera& cam, const std::vector<const TriangleMes
   return out;
 }
 
+// The same silhouette sampled at pixel centres, the renderer's convention: a pixel is
+// foreground when cv::pointPolygonTest puts its centre inside or on a projected triangle.
+cv::Mat centre_sampled_silhouette(const Camera& cam, const std::vector<const TriangleMesh*>& meshes) {
+  cv::Mat K, R, rvec, dist(1, 5, CV_64F), t(3, 1, CV_64F);
+  cv::eigen2cv(cam.K, K);
+  cv::eigen2cv(cam.R, R);
+  cv::Rodrigues(R, rvec);
+  for (int k = 0; k < 5; ++k) dist.at<double>(k) = cam.dist(k);
+  for (int k = 0; k < 3; ++k) t.at<double>(k) = cam.t(k);
+  cv::Mat out = cv::Mat::zeros(cam.height, cam.width, CV_8UC1);
+  for (const TriangleMesh* m : meshes) {
+    std::vector<cv::Point3d> world;
+    for (int i = 0; i < m->num_vertices(); ++i) world.emplace_back(m->V(i, 0), m->V(i, 1), m->V(i, 2));
+    std::vector<cv::Point2d> image;
+    cv::projectPoints(world, rvec, t, K, dist, image);
+    for (int f = 0; f < m->num_faces(); ++f) {
+      std::vector<cv::Point2f> tri;
+      bool in_front = true;
+      for (int k = 0; k < 3; ++k) {
+        const int v = m->F(f, k);
+        in_front = in_front && (cam.R * m->V.row(v).transpose() + cam.t).z() > 0;
+        tri.emplace_back(static_cast<float>(image[v].x), static_cast<float>(image[v].y));
+      }
+      if (!in_front) continue;
+      const cv::Rect box = cv::boundingRect(tri) & cv::Rect(0, 0, cam.width, cam.height);
+      for (int y = box.y; y < box.y + box.height; ++y)
+        for (int x = box.x; x < box.x + box.width; ++x)
+          if (cv::pointPolygonTest(tri, cv::Point2f(x, y), false) >= 0) out.at<uchar>(y, x) = 255;
+    }
+  }
+  return out;
+}
+
 double max_abs_diff(const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, cv::NORM_INF); }
 
 // ---------------------------------------------------------------- silhouettes
@@ -158,15 +191,19 @@ TEST(Renderer, MaskMatchesAnIndependentlyFilledSilhouette) {
     ASSERT_GT(area, 0.1 * cam.width * cam.height);
     ASSERT_LT(area, 0.9 * cam.width * cam.height);
     EXPECT_GE(mask_iou(r.mask, expected), 0.99) << "supersample " << ss;
-    // Beyond IoU: the pixels that differ lie on the outline (at most about one per
-    // boundary pixel), i.e. no triangle is missing or misplaced.
+    // fillConvexPoly also fills pixels an edge merely touches, so its silhouette holds the
+    // renderer's, about half a pixel wider; comparing centre-sampled coverage instead, the
+    // two may differ only where a pixel centre is within rounding of an edge. A half-pixel
+    // shift of the image would change about one pixel per outline pixel.
     std::vector<std::vector<cv::Point>> contours;
     cv::findContours(expected.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
     size_t outline = 0;
     for (const auto& c : contours) outline += c.size();
+    ASSERT_GT(outline, 1000u);
+    EXPECT_LT(cv::countNonZero(r.mask & ~expected), static_cast<int>(outline / 100)) << "supersample " << ss;
     cv::Mat differ;
-    cv::bitwise_xor(r.mask, expected, differ);
-    EXPECT_LT(cv::countNonZero(differ), static_cast<int>(outline)) << "supersample " << ss;
+    cv::bitwise_xor(r.mask, centre_sampled_silhouette(cam, {&ball, &crate}), differ);
+    EXPECT_LT(cv::countNonZero(differ), static_cast<int>(outline / 100)) << "supersample " << ss;
     // Masks stay binary, and mask, parts and depth agree.
     EXPECT_EQ(cv::countNonZero((r.mask != 0) & (r.mask != 255)), 0);
     EXPECT_EQ(cv::countNonZero((r.mask != 0) != (r.parts != 0)), 0);
