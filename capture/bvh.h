@@ -48,7 +48,9 @@ struct BvhMotion {
 // unbalanced braces). Lines after the declared number of frames are counted, not read.
 BvhMotion parse_bvh(std::string text, const std::string& name);
 BvhMotion read_bvh(const std::string& path);
-// Writes BVH text (tabs, %.6g values) that parse_bvh reads back; end sites as End Site.
+// Writes BVH text (tabs, %.10g values) that parse_bvh reads back; end sites as End Site.
+// Joints are written depth first, and so are the frame columns: the reader's joint order
+// may differ from motion.joints, names and poses are preserved.
 std::string format_bvh(const BvhMotion& motion);
 void write_bvh(const std::string& path, const BvhMotion& motion);
 

@@ -358,7 +358,7 @@ RetargetMapping parse_retarget_mapping(const std::string& text, const std::strin
   m.file = name;
   try {
     y.check_keys(root, "", {"source_units_m", "source_axes", "up", "joints", "bone_weights", "extra_bones",
-                            "rest_elevation", "root", "source_floor", "fixed_dofs", "solver"});
+                            "rest_elevation", "floor_markers", "root", "source_floor", "fixed_dofs", "solver"});
     if (root["source_units_m"]) m.source_metres_per_unit = y.positive(root["source_units_m"], "source_units_m");
     if (root["source_axes"]) m.source_to_target = parse_axes(y, root["source_axes"]);
     if (root["up"]) {
@@ -394,6 +394,7 @@ RetargetMapping parse_retarget_mapping(const std::string& text, const std::strin
       }
     }
     if (root["rest_elevation"]) m.rest_elevation = y.strings(root["rest_elevation"], "rest_elevation");
+    if (root["floor_markers"]) m.floor_markers = y.strings(root["floor_markers"], "floor_markers");
     const YAML::Node r = root["root"];
     if (!r) y.fail_at(root, "root", "missing key (root: {joints: [...]})");
     y.check_keys(r, "root", {"joints", "weight", "scale", "vertical", "horizontal"});
@@ -537,8 +538,24 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
   } else {
     source_floor_m = m.source_floor * m.source_metres_per_unit;
   }
-  double target_floor = std::numeric_limits<double>::infinity();
-  for (int b : res.target_mapped) target_floor = std::min(target_floor, rest[b].translation()(up));
+  std::vector<int> floor_markers;
+  for (const std::string& n : m.floor_markers) {
+    const int k2 = s.marker_index(n);
+    if (k2 < 0) fail(file, ": floor marker '", n, "' is not a marker of the skeleton");
+    floor_markers.push_back(k2);
+  }
+  const Transforms zero_pose = forward_kinematics(s, Eigen::VectorXd::Zero(s.num_dofs()));
+  // The character's lowest foot point: mapped joints and floor markers (character units).
+  auto lowest_target = [&](const Transforms& G) {
+    double low = std::numeric_limits<double>::infinity();
+    for (int b : res.target_mapped) low = std::min(low, G[b].translation()(up));
+    for (int mk : floor_markers) {
+      const Marker& marker = s.markers[mk];
+      low = std::min(low, (G[marker.joint] * (zero_pose[marker.joint].inverse(Eigen::Isometry) * marker.offset))(up));
+    }
+    return low;
+  };
+  const double target_floor = lowest_target(rest);
   out.source_floor_m = source_floor_m;
   out.target_floor = target_floor;
   Eigen::Vector3d target_root_rest = Eigen::Vector3d::Zero();
@@ -594,9 +611,7 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
       // Feet: the character's lowest mapped joint goes where the source's is (scaled),
       // whatever the two skeletons' leg proportions; the hip-height target alone leaves
       // a character with relatively shorter legs floating. Only the root height moves.
-      const Transforms G0 = forward_kinematics(s, q);
-      double low = std::numeric_limits<double>::infinity();
-      for (int b : res.target_mapped) low = std::min(low, G0[b].translation()(up));
+      const double low = lowest_target(forward_kinematics(s, q));
       t.root(up) += target_floor + k * (lowest_mapped(src[f]) - source_floor_m) / metres_per_unit - low;
       solver.solve(q, t, out.solved_dofs, previous, rest_dofs, m.iterations);
     }

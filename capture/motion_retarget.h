@@ -48,6 +48,9 @@ struct RetargetMapping {
   // ankle sits higher above its toes than CMU's), matching the feet's directions exactly
   // would tilt the character's feet and sink its heels when the source stands flat.
   std::vector<std::string> rest_elevation;
+  // Character markers that count as feet for the floor (heels and toes: CMU has no heel
+  // joint, so a heel strike would otherwise push the character's heel through the floor).
+  std::vector<std::string> floor_markers;
   // Root position target: the mean of these source joints, matched to the mean of their
   // mapped character joints.
   std::vector<std::string> root_joints;
@@ -109,8 +112,9 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
 RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& mapping,
                                const Character& character, const RetargetOptions& options = {});
 
-// Angle (degrees) between each mapped bone of the character posed by `dofs` and the
-// source's bone at source time t: the measure reported per frame above.
+// Angle (degrees) between each mapped bone of the character posed by `dofs` and its
+// target from the source at source time t (the source's direction, with the rest
+// elevation offset for `rest_elevation` bones): the measure reported per frame above.
 Eigen::VectorXd bone_direction_errors_deg(const BvhMotion& motion, const RetargetMapping& mapping,
                                           const std::vector<RetargetBone>& bones,
                                           const Skeleton& skeleton, const Eigen::VectorXd& dofs,

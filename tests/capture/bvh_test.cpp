@@ -114,6 +114,32 @@ TEST(Bvh, RoundTripsThroughWriter) {
   EXPECT_DOUBLE_EQ(r.frame_time_s, m.frame_time_s);
 }
 
+// Joints listed breadth first (A, B, C, D with D under B): the file is written depth
+// first (A, B, D, C), and the frame columns must follow, or poses get scrambled.
+TEST(Bvh, WriterOrdersFrameColumnsDepthFirst) {
+  BvhMotion m;
+  m.frame_time_s = 0.04;
+  const std::vector<BvhChannel> rot = {BvhChannel::z_rotation, BvhChannel::x_rotation, BvhChannel::y_rotation};
+  const char* names[] = {"A", "B", "C", "D"};
+  const int parents[] = {-1, 0, 0, 1};
+  for (int j = 0; j < 4; ++j) {
+    BvhJoint b;
+    b.name = names[j];
+    b.parent = parents[j];
+    b.offset = Eigen::Vector3d(j, 1, 0.5 * j);
+    b.channels = rot;
+    b.first_channel = 3 * j;
+    m.joints.push_back(b);
+  }
+  m.frames = Eigen::MatrixXd::Random(3, 12) * 90;
+  const BvhMotion r = parse_bvh(format_bvh(m), "order.bvh");
+  EXPECT_EQ(r.joints[2].name, "D");
+  for (int f = 0; f < 3; ++f) {
+    const BvhTransforms G = bvh_global_transforms(m, f), H = bvh_global_transforms(r, f);
+    for (const char* n : names) EXPECT_TRUE(G[m.joint_index(n)].isApprox(H[r.joint_index(n)], 1e-8)) << n;
+  }
+}
+
 TEST(Bvh, InterpolatesWithSlerpBetweenFrames) {
   const BvhMotion m = parse_bvh(small_bvh(), "small.bvh");
   // At frame times: the frames themselves.

@@ -376,7 +376,9 @@ TEST(Retarget, CmuWalkOntoDdc) {
   const Trajectory tr = trace(ch, r.motion);
   const double lowest = *std::min_element(tr.lowest_vertex.begin(), tr.lowest_vertex.end());
   std::vector<double> sorted = tr.lowest_vertex;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  std::sort(sorted.begin(), sorted.end());
+  std::printf("lowest vertex percentiles 1/5/50/95: %.1f %.1f %.1f %.1f mm\n", sorted[sorted.size() / 100],
+              sorted[sorted.size() / 20], sorted[sorted.size() / 2], sorted[sorted.size() * 19 / 20]);
   std::printf("floor %.1f mm; lowest vertex min %.1f, median %.1f mm; max joint step %.1f mm (frame %d, %s)\n",
               floor_y, lowest, sorted[sorted.size() / 2], tr.max_joint_step, tr.worst_step_frame,
               tr.worst_step_joint.c_str());
