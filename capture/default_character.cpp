@@ -90,8 +90,8 @@ DefaultCharacterConfig parse_config(const YAML::Node& root, const std::string& f
   }
   if (root["garment"]) {
     const Keys g{root["garment"], file, "garment"};
-    g.allow({"type", "length", "flare", "clearance", "top_offset", "segments", "rings", "graph_nodes",
-             "rigidity"});
+    g.allow({"type", "length", "flare", "clearance", "top_offset", "straps", "segments", "rings",
+             "graph_nodes", "rigidity"});
     std::string type = garment_name(c.garment);
     g.read("type", type, "skirt, dress or none");
     if (type == "skirt") c.garment = GarmentType::skirt;
@@ -104,6 +104,8 @@ DefaultCharacterConfig parse_config(const YAML::Node& root, const std::string& f
     g.positive("clearance", c.clearance);
     g.read("top_offset", c.top_offset, "a number");
     if (!std::isfinite(c.top_offset)) fail(file, ": 'garment.top_offset' must be finite");
+    g.read("straps", c.straps, "true or false");
+    if (c.straps && c.garment != GarmentType::dress) fail(file, ": 'garment.straps' needs type: dress");
     g.count("segments", c.segments, 8, 4096);
     g.count("rings", c.rings, 2, 4096);
     g.count("graph_nodes", c.cloth_graph_nodes, 1, 100000);
@@ -182,7 +184,15 @@ DefaultCharacter make_default_character(const DefaultCharacterConfig& cfg) {
     o.rings = cfg.rings;
     o.top_y = cfg.garment == GarmentType::skirt ? out.fit.waist_y + cfg.top_offset : out.fit.armpit_y - cfg.top_offset;
     if (o.top_y - o.length < 0) fail(what, ": the garment's hem would be below the floor (top at ", o.top_y, " m, length ", o.length, " m)");
-    const TubeGarment g = generate_tube_garment(body.mesh, out.arm_vertices, o);
+    TubeGarment g = generate_tube_garment(body.mesh, out.arm_vertices, o);
+    if (cfg.straps)
+      for (const char* side : {"l_", "r_"}) {
+        // Over the shoulder 60 % of the way out to the shoulder joint; the part above the
+        // clavicles is anchored.
+        const Vector3d& sh = out.fit.joints.at(std::string(side) + "shoulder");
+        const Vector3d& cl = out.fit.joints.at(std::string(side) + "clavicle");
+        add_shoulder_strap(g, body.mesh, 0.6 * sh.x(), cfg.clearance, cl.y(), cfg.segments);
+      }
     out.garment_min_distance = g.min_distance;
     out.garment_inside = g.inside;
     CharacterMesh cloth;

@@ -28,6 +28,7 @@ struct DefaultCharacterConfig {
   double flare = 0.35;       // radius gained per metre of drop beyond what the body needs
   double clearance = 0.012;  // minimum distance to the body in the bind pose
   double top_offset = 0;     // skirt: top ring this far above the waist; dress: below the armpits
+  bool straps = false;       // dress only: two shoulder straps sewn to the top ring
   int segments = 64;         // vertices around
   int rings = 48;            // rings top to hem
   int cloth_graph_nodes = 300;

@@ -155,4 +155,120 @@ TubeGarment generate_tube_garment(const TriangleMesh& body, const std::vector<ch
   return g;
 }
 
+void add_shoulder_strap(TubeGarment& g, const TriangleMesh& body, double xs, double clearance, double anchor_y,
+                        int S) {
+  TriangleMesh& m = g.mesh;
+  if (m.num_vertices() < S) fail("shoulder strap: the garment has no top ring of ", S, " vertices");
+  const double top_y = m.V(0, 1), cz = g.centre.y();
+  // The two top-ring vertices nearest to x = xs at the front (or back), sorted by x.
+  auto pick = [&](double side) {
+    int best = -1;
+    for (int k = 0; k < S; ++k)
+      if ((m.V(k, 2) - cz) * side > 0 && (best < 0 || std::abs(m.V(k, 0) - xs) < std::abs(m.V(best, 0) - xs))) best = k;
+    if (best < 0) fail("shoulder strap: no top-ring vertex on that side");
+    const int a = (best + 1) % S, b = (best + S - 1) % S;
+    const int other = std::abs(m.V(a, 0) - xs) < std::abs(m.V(b, 0) - xs) ? a : b;
+    return m.V(best, 0) < m.V(other, 0) ? std::pair<int, int>{best, other} : std::pair<int, int>{other, best};
+  };
+  const auto [f1, f2] = pick(1.0);
+  const auto [b1, b2] = pick(-1.0);
+
+  // The body's contour in the plane x = xs that reaches highest: its part above the top
+  // ring is the way over the shoulder.
+  const auto sections = slice_mesh(body, Vector3d::UnitX(), xs);
+  const Section* sec = nullptr;
+  for (const Section& c : sections)
+    if (c.lo.y() < top_y && c.hi.y() > top_y && (!sec || c.hi.y() > sec->hi.y())) sec = &c;
+  if (!sec) fail("shoulder strap: the plane x = ", xs, " does not cross the body above the top ring");
+  const auto& P = sec->points;
+  const int n = static_cast<int>(P.size());
+  // The longest run of consecutive contour points above the top ring.
+  int best_start = -1, best_len = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!(P[i].y() > top_y && P[(i + n - 1) % n].y() <= top_y)) continue;
+    int len = 0;
+    while (len < n && P[(i + len) % n].y() > top_y) ++len;
+    if (len > best_len) best_len = len, best_start = i;
+  }
+  if (best_len < 3) fail("shoulder strap: the body does not rise above the top ring at x = ", xs);
+  std::vector<Vector3d> arc;
+  for (int k = 0; k < best_len; ++k) {
+    const int i = (best_start + k) % n;
+    // Outward normal in the plane: perpendicular to the contour, away from its centroid.
+    const Vector3d t = P[(i + 1) % n] - P[(i + n - 1) % n];
+    Vector3d nrm(0, -t.z(), t.y());
+    if (nrm.dot(P[i] - sec->centroid) < 0) nrm = -nrm;
+    arc.push_back(P[i] + 1.5 * clearance * nrm.normalized());
+  }
+  if (arc.front().z() < arc.back().z()) std::reverse(arc.begin(), arc.end());  // front to back
+
+  const Vector3d F1 = m.V.row(f1), F2 = m.V.row(f2), B1 = m.V.row(b1), B2 = m.V.row(b2);
+  std::vector<Vector3d> path{0.5 * (F1 + F2)};
+  path.insert(path.end(), arc.begin(), arc.end());
+  path.push_back(0.5 * (B1 + B2));
+  std::vector<double> at{0};
+  for (size_t i = 1; i < path.size(); ++i) at.push_back(at.back() + (path[i] - path[i - 1]).norm());
+  const double spacing = std::max(1e-6, (F2 - F1).norm());
+  const int N = std::max(3, static_cast<int>(std::ceil(at.back() / spacing)) + 1);
+  auto point_at = [&](double s) {
+    size_t i = 1;
+    while (i + 1 < at.size() && at[i] < s) ++i;
+    const double u = at[i] > at[i - 1] ? (s - at[i - 1]) / (at[i] - at[i - 1]) : 0;
+    return Vector3d(path[i - 1] + std::clamp(u, 0.0, 1.0) * (path[i] - path[i - 1]));
+  };
+
+  // Stations 0 and N−1 are the ring vertices; the others are new.
+  std::vector<std::array<int, 2>> station(N);
+  station[0] = {f1, f2};
+  station[N - 1] = {b1, b2};
+  const int first_new = m.num_vertices();
+  m.V.conservativeResize(first_new + 2 * (N - 2), 3);
+  for (int i = 1; i + 1 < N; ++i) {
+    const double t = static_cast<double>(i) / (N - 1);
+    const Vector3d c = point_at(t * at.back());
+    const Vector3d a = (1 - t) * (F1 - path.front()) + t * (B1 - path.back());
+    const Vector3d b = (1 - t) * (F2 - path.front()) + t * (B2 - path.back());
+    const int va = first_new + 2 * (i - 1);
+    m.V.row(va) = (c + a).transpose();
+    m.V.row(va + 1) = (c + b).transpose();
+    station[i] = {va, va + 1};
+  }
+  const int first_face = m.num_faces();
+  m.F.conservativeResize(first_face + 2 * (N - 1), 3);
+  for (int i = 0; i + 1 < N; ++i) {
+    const auto [a0, b0] = station[i];
+    const auto [a1, b1n] = station[i + 1];
+    m.F.row(first_face + 2 * i) << a0, b0, a1;
+    m.F.row(first_face + 2 * i + 1) << b0, b1n, a1;
+  }
+  // Push new vertices that are too close along the direction away from the body.
+  const ClosestTriangleQuery query(body.V, body.F);
+  for (int round = 0; round < 8; ++round) {
+    int moved = 0;
+    for (int v = first_new; v < m.num_vertices(); ++v) {
+      const Vector3d p = m.V.row(v).transpose();
+      const ClosestPoint c = query.closest(p);
+      if (c.distance >= clearance) continue;
+      m.V.row(v) += ((p - c.point).normalized() * (1.05 * (clearance - c.distance) + 1e-4 * clearance)).transpose();
+      ++moved;
+    }
+    if (!moved) break;
+  }
+  // Outward triangles: flip the strap if its faces mostly point toward the body.
+  const Vertices N_f = face_normals(m.V, m.F);
+  int inward = 0;
+  for (int f = first_face; f < m.num_faces(); ++f) {
+    const Vector3d c = (m.V.row(m.F(f, 0)) + m.V.row(m.F(f, 1)) + m.V.row(m.F(f, 2))).transpose() / 3;
+    inward += N_f.row(f).dot(c - query.closest(c).point) < 0;
+  }
+  if (2 * inward > m.num_faces() - first_face)
+    for (int f = first_face; f < m.num_faces(); ++f) std::swap(m.F(f, 1), m.F(f, 2));
+  for (int v = first_new; v < m.num_vertices(); ++v)
+    if (m.V(v, 1) > anchor_y) g.anchors.push_back(v);
+  validate_mesh(m, "garment with straps");
+  const Eigen::VectorXd sd = signed_distances(body, m.V);
+  g.min_distance = sd.cwiseAbs().minCoeff();
+  g.inside = static_cast<int>((sd.array() < 0).count());
+}
+
 }  // namespace weft::capture

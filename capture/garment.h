@@ -35,6 +35,15 @@ struct TubeGarment {
 TubeGarment generate_tube_garment(const TriangleMesh& body, const std::vector<char>& excluded,
                                   const TubeGarmentOptions& options);
 
+// Adds a shoulder strap to a tube garment (a dress): a band two vertices wide that leaves
+// the top ring at the front where x is closest to `x`, runs over the shoulder `clearance`
+// outside the body's cross-section by the plane x = const, and rejoins the top ring at
+// the back (its end vertices are top-ring vertices, so the strap is sewn to the dress).
+// Strap vertices higher than `anchor_y` become anchors. Throws weft::Error if the plane
+// does not reach over the body above the top ring.
+void add_shoulder_strap(TubeGarment& garment, const TriangleMesh& body, double x, double clearance,
+                        double anchor_y, int segments);
+
 // Signed distance of each point to a closed body mesh: the distance to the closest
 // triangle, negative inside (generalised winding number). Multithreaded (TBB).
 Eigen::VectorXd signed_distances(const TriangleMesh& body, const Vertices& points);

@@ -228,12 +228,25 @@ TEST(DefaultCharacterGarment, SkirtAndDressClearTheBody) {
     const Eigen::VectorXd sd = signed_distances(ch.body.mesh, cloth.V);
     EXPECT_GE(sd.minCoeff(), clearance * 0.999) << ch.name;  // outside, arms and hands included
     EXPECT_EQ(dc->garment_inside, 0);
-    // Anchors: the top ring, close to the body surface.
-    ASSERT_EQ(ch.attachment.size(), 64);
+    // Anchors: the top ring (and the dress's straps), close to the body surface.
+    ASSERT_GE(ch.attachment.size(), 64);
     for (int i = 0; i < ch.attachment.size(); ++i) {
-      EXPECT_EQ(ch.attachment.anchors(i), i);
+      if (i < 64) EXPECT_EQ(ch.attachment.anchors(i), i);
       EXPECT_LT(ch.attachment.rest_distance(i), 3 * clearance) << "anchor " << i;
     }
+    // One piece: the straps are sewn to the top ring.
+    const auto adj = vertex_adjacency(cloth.F, cloth.num_vertices());
+    std::vector<char> seen(cloth.num_vertices(), 0);
+    std::vector<int> stack{0};
+    seen[0] = 1;
+    int reached = 1;
+    while (!stack.empty()) {
+      const int v = stack.back();
+      stack.pop_back();
+      for (int u : adj[v])
+        if (!seen[u]) seen[u] = 1, ++reached, stack.push_back(u);
+    }
+    EXPECT_EQ(reached, cloth.num_vertices()) << ch.name;
     // Outward-facing triangles: the normals point away from the axis.
     const Vertices N = face_normals(cloth.V, cloth.F);
     int outward = 0;
@@ -248,6 +261,19 @@ TEST(DefaultCharacterGarment, SkirtAndDressClearTheBody) {
   EXPECT_NEAR(skirt().character.cloth->mesh.V(0, 1), skirt().fit.waist_y, 1e-9);
   EXPECT_NEAR(skirt().character.cloth->mesh.V.col(1).minCoeff(), skirt().fit.waist_y - 0.45, 1e-9);
   EXPECT_NEAR(dress().character.cloth->mesh.V(0, 1), dress().fit.armpit_y - 0.04, 1e-9);
+  // The dress's straps go over the shoulders (above the clavicles), both sides, and part
+  // of each is anchored there.
+  const Character& d = dress().character;
+  EXPECT_EQ(skirt().character.attachment.size(), 64);
+  int left = 0, right = 0;
+  for (int i = 64; i < d.attachment.size(); ++i) {
+    const Vector3d p = d.cloth->mesh.V.row(d.attachment.anchors(i)).transpose();
+    EXPECT_GT(p.y(), joint(d, "l_clavicle").y());
+    (p.x() > 0 ? left : right)++;
+  }
+  EXPECT_GT(left, 10);
+  EXPECT_GT(right, 10);
+  EXPECT_GT(d.cloth->mesh.V.col(1).maxCoeff(), joint(d, "l_shoulder").y());
 }
 
 TEST(DefaultCharacterGarment, ArmsAreInactiveAndTheTorsoIsNot) {

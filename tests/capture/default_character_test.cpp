@@ -50,7 +50,7 @@ TriangleMesh cylinder(double r, double y0, double y1, int around = 32, int rows 
 TEST(DefaultCharacterConfig, ParsesEveryKey) {
   const DefaultCharacterConfig c = parse_default_character_config(
       "name: x\nmesh: body.obj\nheight_m: 1.8\nbody: {graph_nodes: 200, nodes_per_vertex: 3}\n"
-      "garment:\n  type: dress\n  length: 0.7\n  flare: 0.2\n  clearance: 0.02\n  top_offset: 0.05\n"
+      "garment:\n  type: dress\n  straps: true\n  length: 0.7\n  flare: 0.2\n  clearance: 0.02\n  top_offset: 0.05\n"
       "  segments: 48\n  rings: 30\n  graph_nodes: 100\n  rigidity: 0.3\n",
       "/cfg/c.yaml");
   EXPECT_EQ(c.name, "x");
@@ -59,6 +59,7 @@ TEST(DefaultCharacterConfig, ParsesEveryKey) {
   EXPECT_EQ(c.body_graph_nodes, 200);
   EXPECT_EQ(c.nodes_per_vertex, 3);
   EXPECT_EQ(c.garment, GarmentType::dress);
+  EXPECT_TRUE(c.straps);
   EXPECT_EQ(c.length, 0.7);
   EXPECT_EQ(c.flare, 0.2);
   EXPECT_EQ(c.clearance, 0.02);
@@ -77,6 +78,8 @@ TEST(DefaultCharacterConfig, UnknownKeysAndBadValuesNameKeyAndFile) {
   expect_error([] { parse_default_character_config("garment: {type: trousers}\n", "c.yaml"); },
                {"c.yaml", "garment.type", "trousers"});
   expect_error([] { parse_default_character_config("height_m: -2\n", "d.yaml"); }, {"d.yaml", "height_m", "> 0"});
+  expect_error([] { parse_default_character_config("garment: {type: skirt, straps: true}\n", "s.yaml"); },
+               {"s.yaml", "garment.straps", "dress"});
   expect_error([] { parse_default_character_config("garment: {segments: 4}\n", "e.yaml"); },
                {"e.yaml", "garment.segments"});
   expect_error([] { parse_default_character_config("height_m: tall\n", "f.yaml"); }, {"f.yaml", "height_m"});
