@@ -132,6 +132,34 @@ TEST(Energies, SphereCollisionMatchesFiniteDifferences) {
   testing::expect_derivatives_match(e, x);
 }
 
+TEST(Energies, CollisionPenaltyIsSmoothAtTheBandEdge) {
+  // E = k/(6δ)(δ − d)³: force and stiffness vanish as d → δ from inside (C²), the
+  // stiffness along the normal is k at contact (d = 0) and the force there k·δ/2.
+  const double k = 1e4, delta = 0.01, r = 0.5;
+  CollisionEnergy e(1, delta, k);
+  e.set_spheres({{Vec3(0, 0, 0), r}});
+  std::vector<std::array<int, 2>> pairs;
+  SparseHessian h(1, pairs);
+  auto probe = [&](double d, double& force, double& stiffness) {
+    const Eigen::VectorXd x = Eigen::Vector3d(0, r + d, 0);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(3);
+    h.set_zero();
+    e.evaluate(x, &g, &h);
+    force = -g[1];
+    stiffness = h.to_full().coeff(1, 1);
+  };
+  double f, s;
+  probe(delta * (1 - 1e-6), f, s);
+  EXPECT_LT(f, 1e-9 * k * delta);
+  EXPECT_LT(s, 1e-5 * k);
+  probe(delta * 1.001, f, s);
+  EXPECT_EQ(f, 0.0);
+  EXPECT_EQ(s, 0.0);
+  probe(0.0, f, s);
+  EXPECT_NEAR(f, 0.5 * k * delta, 1e-9 * k * delta);
+  EXPECT_NEAR(s, k, 1e-9 * k);
+}
+
 TEST(Energies, MeshCollisionMatchesFiniteDifferences) {
   // Near a cube's face (inside and outside), edge and corner: face, edge and vertex
   // regions of the closest-point query.

@@ -79,6 +79,8 @@ TEST(Simulator, ClothDroppedOnSphereNeverPenetrates) {
   for (int f = 0; f < 45; ++f) {
     const StepResult r = sim.step(x2, x1);
     ASSERT_NE(r.status, StepStatus::non_finite);
+    // Newton converges on every contact step (it used to stall at the iteration cap).
+    EXPECT_EQ(r.status, StepStatus::converged) << "frame " << f;
     FrameMetrics m;
     measure_penetration(sim, r.x, m);
     min_d = std::min(min_d, m.min_signed_distance);
