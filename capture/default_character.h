@@ -2,9 +2,9 @@
 // The synthetic studio's default character: the MakeHuman base body of Debian's
 // assimp-testmodels (or any closed A-pose body assimp reads), scaled to a height, with a
 // skeleton fitted to its geometry (capture/body_skeleton_fit.h), bone-distance skinning
-// weights, a BODY_25 map, embedded graphs and a generated skirt or dress anchored at its
-// top ring. Built in memory and written as a character folder that load_character reads
-// (docs/CHARACTER.md, "Generated characters"). Units: metres.
+// weights, a BODY_25 map, embedded graphs and a generated skirt or dress (optionally with
+// shoulder straps) anchored at its top ring. Built in memory and written as a character
+// folder that load_character reads (docs/CHARACTER.md, "Generated characters"). Metres.
 #include <string>
 
 #include "capture/body_skeleton_fit.h"
