@@ -1,8 +1,8 @@
 // Synthetic studio renderer speed: milliseconds per rendered view (shaded RGB, mask,
 // parts, depth) of
 //   ddc:      the ddc body (5,514 vertices, 11,024 triangles, textured with ddc.png) in its
-//             bind pose, seen from the front, green screen; read through configs/characters/ddc.yaml
-//             when ../shared/data/ddc exists, skipped otherwise;
+//             bind pose, seen from the front, green screen; read through
+//             configs/characters/ddc.yaml when ../shared/data/ddc exists, skipped otherwise;
 //   ddc+clutter: the same over a cluttered background generated per view (seeded);
 //   sphere:   a 10,080-triangle sphere with per-vertex colours, green screen;
 // at each image size and thread count; the person's height fills ~80 % of the frame.
@@ -124,14 +124,21 @@ int main(int argc, char** argv) {
   std::vector<int> sizes{512, 1024}, threads{1, 2};
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--repeats") repeats = std::max(1, std::atoi(v.c_str()));
-    else if (a == "--sizes") sizes = int_list(v);
-    else if (a == "--threads") threads = int_list(v);
-    else if (a == "--supersample") supersample = std::atoi(v.c_str());
-    else if (a == "--out") out_dir = v;
+    if (a == "--repeats")
+      repeats = std::max(1, std::atoi(v.c_str()));
+    else if (a == "--sizes")
+      sizes = int_list(v);
+    else if (a == "--threads")
+      threads = int_list(v);
+    else if (a == "--supersample")
+      supersample = std::atoi(v.c_str());
+    else if (a == "--out")
+      out_dir = v;
     else {
-      std::fprintf(stderr, "unknown option %s\nusage: bench_render [--repeats 15] [--sizes 512,1024] "
-                           "[--threads 1,2] [--supersample 1] [--out DIR]\n", a.c_str());
+      std::fprintf(stderr,
+                   "unknown option %s\nusage: bench_render [--repeats 15] [--sizes 512,1024] "
+                   "[--threads 1,2] [--supersample 1] [--out DIR]\n",
+                   a.c_str());
       return 2;
     }
   }
@@ -166,8 +173,8 @@ int main(int argc, char** argv) {
   scenes.push_back({"sphere", {ball_mesh}, {}, &ball.V, ball.num_faces()});
 
   const std::string load_before = loadavg();
-  std::printf("%-12s %5s %9s %9s %7s | %9s %8s | %10s\n", "scene", "tris", "size", "covered", "threads",
-              "ms/view", "views/s", "cpu ms/view");
+  std::printf("%-12s %5s %9s %9s %7s | %9s %8s | %10s\n", "scene", "tris", "size", "covered",
+              "threads", "ms/view", "views/s", "cpu ms/view");
   for (int size : sizes)
     for (const Scene& s : scenes) {
       const Camera cam = front_camera(*s.frame, size);
@@ -198,8 +205,10 @@ int main(int argc, char** argv) {
           cv::imwrite(stem + "_parts.png", r.parts * 100);
           cv::imwrite(stem + "_dt.png", dt);
         }
-        std::printf("%-12s %5d %4dx%-4d %8.1f%% %7d | %9.2f %8.1f | %10.2f\n", s.name.c_str(), s.triangles, size,
-                    size, 100.0 * cv::countNonZero(r.mask) / (double(size) * size), t, m, 1000 / m, cpu_ms);
+        std::printf("%-12s %5d %4dx%-4d %8.1f%% %7d | %9.2f %8.1f | %10.2f\n", s.name.c_str(),
+                    s.triangles, size, size,
+                    100.0 * cv::countNonZero(r.mask) / (double(size) * size), t, m, 1000 / m,
+                    cpu_ms);
       }
     }
   // The distance transform of the first scene's mask (not part of render()).
@@ -212,10 +221,11 @@ int main(int argc, char** argv) {
       const cv::Mat dt = distance_transform(mask);
       ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     }
-    std::printf("distance_transform %4dx%-4d (%s mask): %.2f ms\n", size, size, scenes.front().name.c_str(),
-                median(ms));
+    std::printf("distance_transform %4dx%-4d (%s mask): %.2f ms\n", size, size,
+                scenes.front().name.c_str(), median(ms));
   }
-  std::printf("supersample %d, median of %d after 3 warm-up renders; load average %s (before) %s (after)\n",
-              supersample, repeats, load_before.c_str(), loadavg().c_str());
+  std::printf(
+      "supersample %d, median of %d after 3 warm-up renders; load average %s (before) %s (after)\n",
+      supersample, repeats, load_before.c_str(), loadavg().c_str());
   return 0;
 }

@@ -62,14 +62,16 @@ std::string mesh_name(size_t index, const RenderMesh& m) {
 
 void check_options(const RenderOptions& o) {
   if (o.supersample < 1 || o.supersample > 7 || o.supersample % 2 == 0)
-    fail("render: supersample must be odd and within 1..7 (the centre sample is the pixel centre), got ",
+    fail("render: supersample must be odd, 1..7 (its centre sample is the pixel centre), got ",
          o.supersample);
-  if (!std::isfinite(o.near) || !(o.near > 0)) fail("render: near must be positive and finite, got ", o.near);
+  if (!std::isfinite(o.near) || !(o.near > 0))
+    fail("render: near must be positive and finite, got ", o.near);
   const Lighting& l = o.lighting;
   const std::initializer_list<std::pair<const char*, double>> terms = {
       {"ambient", l.ambient}, {"headlight", l.headlight}, {"exposure", l.exposure}};
   for (const auto& [name, value] : terms)
-    if (!std::isfinite(value) || value < 0) fail("render: lighting ", name, " must be finite and ≥ 0, got ", value);
+    if (!std::isfinite(value) || value < 0)
+      fail("render: lighting ", name, " must be finite and ≥ 0, got ", value);
   for (size_t k = 0; k < l.lights.size(); ++k) {
     const DirectionalLight& d = l.lights[k];
     if (!d.direction.allFinite() || d.direction.norm() < 1e-12)
@@ -86,7 +88,8 @@ void check_mesh(size_t index, const RenderMesh& m) {
   const Vertices& V = m.vertices ? *m.vertices : mesh.V;
   if (V.rows() != mesh.V.rows())
     fail(what, ": ", V.rows(), " posed vertices for a mesh of ", mesh.V.rows(), " vertices");
-  if (m.part < 1 || m.part > 255) fail(what, ": part id must be within 1..255 (0 is the background)");
+  if (m.part < 1 || m.part > 255)
+    fail(what, ": part id must be within 1..255 (0 is the background)");
   const Eigen::Index n = V.rows();
   for (Eigen::Index i = 0; i < n; ++i)
     if (!V.row(i).allFinite())
@@ -103,24 +106,26 @@ void check_mesh(size_t index, const RenderMesh& m) {
       break;
     case ColorSource::vertex:
       if (mesh.colors.rows() != n)
-        fail(what, ": per-vertex colours requested but the mesh has ", mesh.colors.rows(), " colours for ", n,
-             " vertices");
+        fail(what, ": per-vertex colours requested but the mesh has ", mesh.colors.rows(),
+             " colours for ", n, " vertices");
       if (!mesh.colors.allFinite()) fail(what, ": per-vertex colours are not finite");
       break;
     case ColorSource::texture: {
-      if (m.texture.empty()) fail(what, ": texture colours requested but the texture image is empty");
+      if (m.texture.empty())
+        fail(what, ": texture colours requested but the texture image is empty");
       if (m.texture.type() != CV_8UC3)
         fail(what, ": texture must be CV_8UC3 (BGR), got ", cv::typeToString(m.texture.type()));
       if (mesh.uv_faces.rows() != F.rows() || mesh.uv.rows() == 0)
-        fail(what, ": texture colours requested but the mesh has no texture coordinates (uv ", mesh.uv.rows(),
-             " rows, uv_faces ", mesh.uv_faces.rows(), " for ", F.rows(), " faces)");
+        fail(what, ": texture colours requested but the mesh has no texture coordinates (uv ",
+             mesh.uv.rows(), " rows, uv_faces ", mesh.uv_faces.rows(), " for ", F.rows(),
+             " faces)");
       if (!mesh.uv.allFinite()) fail(what, ": texture coordinates are not finite");
       const Eigen::Index t = mesh.uv.rows();
       for (Eigen::Index f = 0; f < F.rows(); ++f)
         for (int k = 0; k < 3; ++k)
           if (mesh.uv_faces(f, k) < 0 || mesh.uv_faces(f, k) >= t)
-            fail(what, ": uv face ", f, " refers to texture coordinate ", mesh.uv_faces(f, k), ", outside 0..",
-                 t - 1);
+            fail(what, ": uv face ", f, " refers to texture coordinate ", mesh.uv_faces(f, k),
+                 ", outside 0..", t - 1);
       break;
     }
   }
@@ -140,7 +145,8 @@ bool radially_monotonic(const Camera& c, double r2) {
   return 1 + r2 * (3 * k1 + r2 * (5 * k2 + r2 * 7 * k3)) > 0;
 }
 
-std::vector<ScreenVertex> project_to_samples(const Camera& camera, const Vertices& V, int s, double near) {
+std::vector<ScreenVertex> project_to_samples(const Camera& camera, const Vertices& V, int s,
+                                             double near) {
   // Sample (sx, sy) of pixel (x, y) sits at pixel coordinates x + (sx − (s−1)/2)/s, so a
   // pixel coordinate u maps to the sample coordinate s·u + (s−1)/2.
   const double offset = 0.5 * (s - 1);
@@ -168,14 +174,15 @@ std::vector<ScreenVertex> project_to_samples(const Camera& camera, const Vertice
 int64_t ceil_sample(int64_t a) { return -((-a) >> kSubpixelBits); }
 int64_t floor_sample(int64_t a) { return a >> kSubpixelBits; }
 
-void setup_triangles(const std::vector<ScreenVertex>& sv, const Faces& F, int mesh, int width, int height,
-                     std::vector<ScreenTriangle>& out) {
+void setup_triangles(const std::vector<ScreenVertex>& sv, const Faces& F, int mesh, int width,
+                     int height, std::vector<ScreenTriangle>& out) {
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const ScreenVertex* v[3] = {&sv[F(f, 0)], &sv[F(f, 1)], &sv[F(f, 2)]};
     if (!v[0]->ok || !v[1]->ok || !v[2]->ok) continue;
     ScreenTriangle t;
     int order[3] = {0, 1, 2};
-    int64_t area2 = (v[1]->x - v[0]->x) * (v[2]->y - v[0]->y) - (v[1]->y - v[0]->y) * (v[2]->x - v[0]->x);
+    int64_t area2 =
+        (v[1]->x - v[0]->x) * (v[2]->y - v[0]->y) - (v[1]->y - v[0]->y) * (v[2]->x - v[0]->x);
     if (area2 == 0) continue;  // no sample can lie strictly inside
     if (area2 < 0) {
       std::swap(order[1], order[2]);
@@ -188,9 +195,11 @@ void setup_triangles(const std::vector<ScreenVertex>& sv, const Faces& F, int me
       t.corner[k] = order[k];
     }
     const int64_t x0 = std::max<int64_t>(0, ceil_sample(std::min({t.x[0], t.x[1], t.x[2]})));
-    const int64_t x1 = std::min<int64_t>(width - 1, floor_sample(std::max({t.x[0], t.x[1], t.x[2]})));
+    const int64_t x1 =
+        std::min<int64_t>(width - 1, floor_sample(std::max({t.x[0], t.x[1], t.x[2]})));
     const int64_t y0 = std::max<int64_t>(0, ceil_sample(std::min({t.y[0], t.y[1], t.y[2]})));
-    const int64_t y1 = std::min<int64_t>(height - 1, floor_sample(std::max({t.y[0], t.y[1], t.y[2]})));
+    const int64_t y1 =
+        std::min<int64_t>(height - 1, floor_sample(std::max({t.y[0], t.y[1], t.y[2]})));
     if (x0 > x1 || y0 > y1) continue;  // off screen, or between sample centres
     t.x0 = static_cast<int>(x0);
     t.x1 = static_cast<int>(x1);
@@ -207,8 +216,8 @@ void setup_triangles(const std::vector<ScreenVertex>& sv, const Faces& F, int me
 // `width` samples wide. Coverage: a sample centre strictly inside, or on an edge that
 // the top-left rule gives to this triangle. Nearer (larger 1/z) wins; ties keep the
 // earlier triangle, and the list is in input order, so the result is deterministic.
-void rasterise_band(const std::vector<ScreenTriangle>& tris, const std::vector<int>& list, int row0, int row1,
-                    int width, BandBuffers& buf) {
+void rasterise_band(const std::vector<ScreenTriangle>& tris, const std::vector<int>& list, int row0,
+                    int row1, int width, BandBuffers& buf) {
   const size_t n = static_cast<size_t>(row1 - row0) * width;
   buf.inv_z.assign(n, 0.0);
   buf.triangle.assign(n, -1);
@@ -277,9 +286,12 @@ Eigen::Vector3d sample_texture(const cv::Mat& tex, double u, double v) {
 
 class Shader {
  public:
-  Shader(const Camera& camera, const std::vector<ShadingMesh>& meshes, const std::vector<ScreenTriangle>& tris,
-         const Lighting& lighting)
-      : meshes_(meshes), tris_(tris), center_(camera.center()), ambient_(lighting.ambient),
+  Shader(const Camera& camera, const std::vector<ShadingMesh>& meshes,
+         const std::vector<ScreenTriangle>& tris, const Lighting& lighting)
+      : meshes_(meshes),
+        tris_(tris),
+        center_(camera.center()),
+        ambient_(lighting.ambient),
         exposure_(lighting.exposure) {
     // The headlight travels along the optical axis (camera +z in world coordinates).
     const Eigen::Vector3d axis = camera.R.row(2).transpose();
@@ -301,7 +313,8 @@ class Shader {
     const int i0 = F(t.face, 0), i1 = F(t.face, 1), i2 = F(t.face, 2);
     const Vertices& V = *m.V;
     const Eigen::Vector3d p = w[0] * V.row(i0) + w[1] * V.row(i1) + w[2] * V.row(i2);
-    Eigen::Vector3d n = w[0] * m.normals.row(i0) + w[1] * m.normals.row(i1) + w[2] * m.normals.row(i2);
+    Eigen::Vector3d n =
+        w[0] * m.normals.row(i0) + w[1] * m.normals.row(i1) + w[2] * m.normals.row(i2);
     const double len = n.norm();
     n = len > 1e-12 ? Eigen::Vector3d(n / len) : Eigen::Vector3d(m.face_normals.row(t.face));
     if (n.dot(center_ - p) < 0) n = -n;  // the side we see; cloth is two-sided
@@ -337,7 +350,8 @@ class Shader {
 
 }  // namespace
 
-RenderResult render(const Camera& camera, const std::vector<RenderMesh>& meshes, const RenderOptions& options) {
+RenderResult render(const Camera& camera, const std::vector<RenderMesh>& meshes,
+                    const RenderOptions& options) {
   validate_camera(camera, "render");
   check_options(options);
   for (size_t i = 0; i < meshes.size(); ++i) check_mesh(i, meshes[i]);
@@ -384,66 +398,72 @@ RenderResult render(const Camera& camera, const std::vector<RenderMesh>& meshes,
   const int centre = (s - 1) / 2;
   const double inv_samples = 1.0 / (s * s);
   auto to_bgr = [](const Eigen::Vector3d& c) {
-    return cv::Vec3b(cv::saturate_cast<uchar>(c(0)), cv::saturate_cast<uchar>(c(1)), cv::saturate_cast<uchar>(c(2)));
+    return cv::Vec3b(cv::saturate_cast<uchar>(c(0)), cv::saturate_cast<uchar>(c(1)),
+                     cv::saturate_cast<uchar>(c(2)));
   };
 
   tbb::enumerable_thread_specific<BandBuffers> buffers;
-  tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
-    BandBuffers& buf = buffers.local();
-    for (int band = range.begin(); band != range.end(); ++band) {
-      const int row0 = band * band_samples, row1 = std::min(row0 + band_samples, Hs);
-      rasterise_band(tris, bins[band], row0, row1, Ws, buf);
-      for (int y = row0 / s; y < row1 / s; ++y) {
-        const cv::Vec3b* bg = background.empty() ? nullptr : background.ptr<cv::Vec3b>(y);
-        cv::Vec3b* rgb = r.rgb.ptr<cv::Vec3b>(y);
-        uchar* mask = r.mask.ptr<uchar>(y);
-        uchar* parts = r.parts.ptr<uchar>(y);
-        float* depth = r.depth.ptr<float>(y);
-        const size_t centre_row = static_cast<size_t>(y * s + centre - row0) * Ws + centre;
-        for (int x = 0; x < W; ++x) {
-          // The centre sample is the pixel centre: it alone decides mask, parts and depth.
-          const size_t c = centre_row + static_cast<size_t>(x) * s;
-          const int id = buf.triangle[c];
-          mask[x] = id < 0 ? 0 : 255;
-          parts[x] = id < 0 ? 0 : static_cast<uchar>(meshes[tris[id].mesh].part);
-          depth[x] = id < 0 ? 0.0f : static_cast<float>(1.0 / buf.inv_z[c]);
-          const cv::Vec3b back = bg ? bg[x] : solid;
-          if (s == 1) {
-            rgb[x] = id < 0 ? back : to_bgr(shader.shade(id, buf.b1[c], buf.b2[c]));
-            continue;
-          }
-          Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-          for (int sy = 0; sy < s; ++sy) {
-            const size_t row = static_cast<size_t>(y * s + sy - row0) * Ws + static_cast<size_t>(x) * s;
-            for (int sx = 0; sx < s; ++sx) {
-              const int sid = buf.triangle[row + sx];
-              sum += sid < 0 ? Eigen::Vector3d(back[0], back[1], back[2])
-                             : shader.shade(sid, buf.b1[row + sx], buf.b2[row + sx]);
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
+        BandBuffers& buf = buffers.local();
+        for (int band = range.begin(); band != range.end(); ++band) {
+          const int row0 = band * band_samples, row1 = std::min(row0 + band_samples, Hs);
+          rasterise_band(tris, bins[band], row0, row1, Ws, buf);
+          for (int y = row0 / s; y < row1 / s; ++y) {
+            const cv::Vec3b* bg = background.empty() ? nullptr : background.ptr<cv::Vec3b>(y);
+            cv::Vec3b* rgb = r.rgb.ptr<cv::Vec3b>(y);
+            uchar* mask = r.mask.ptr<uchar>(y);
+            uchar* parts = r.parts.ptr<uchar>(y);
+            float* depth = r.depth.ptr<float>(y);
+            const size_t centre_row = static_cast<size_t>(y * s + centre - row0) * Ws + centre;
+            for (int x = 0; x < W; ++x) {
+              // The centre sample is the pixel centre: it alone decides mask, parts and depth.
+              const size_t c = centre_row + static_cast<size_t>(x) * s;
+              const int id = buf.triangle[c];
+              mask[x] = id < 0 ? 0 : 255;
+              parts[x] = id < 0 ? 0 : static_cast<uchar>(meshes[tris[id].mesh].part);
+              depth[x] = id < 0 ? 0.0f : static_cast<float>(1.0 / buf.inv_z[c]);
+              const cv::Vec3b back = bg ? bg[x] : solid;
+              if (s == 1) {
+                rgb[x] = id < 0 ? back : to_bgr(shader.shade(id, buf.b1[c], buf.b2[c]));
+                continue;
+              }
+              Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+              for (int sy = 0; sy < s; ++sy) {
+                const size_t row =
+                    static_cast<size_t>(y * s + sy - row0) * Ws + static_cast<size_t>(x) * s;
+                for (int sx = 0; sx < s; ++sx) {
+                  const int sid = buf.triangle[row + sx];
+                  sum += sid < 0 ? Eigen::Vector3d(back[0], back[1], back[2])
+                                 : shader.shade(sid, buf.b1[row + sx], buf.b2[row + sx]);
+                }
+              }
+              rgb[x] = to_bgr(sum * inv_samples);
             }
           }
-          rgb[x] = to_bgr(sum * inv_samples);
         }
-      }
-    }
-  });
+      });
   return r;
 }
 
 cv::Mat background_image(const Background& b, int width, int height) {
-  if (width <= 0 || height <= 0) fail("background: image size ", width, "x", height, " must be positive");
+  if (width <= 0 || height <= 0)
+    fail("background: image size ", width, "x", height, " must be positive");
   switch (b.kind) {
     case BackgroundKind::solid:
       return cv::Mat(height, width, CV_8UC3, b.color);
     case BackgroundKind::image: {
       if (b.image.empty()) fail("background: kind 'image' but the background image is empty");
       if (b.image.type() != CV_8UC3 && b.image.type() != CV_8UC1)
-        fail("background: image must be CV_8UC3 (BGR) or CV_8UC1, got ", cv::typeToString(b.image.type()));
+        fail("background: image must be CV_8UC3 (BGR) or CV_8UC1, got ",
+             cv::typeToString(b.image.type()));
       cv::Mat bgr = b.image;
       if (bgr.type() == CV_8UC1) cv::cvtColor(b.image, bgr, cv::COLOR_GRAY2BGR);
       if (bgr.cols == width && bgr.rows == height) return bgr.clone();
       cv::Mat out;
       const bool shrink = bgr.cols > width && bgr.rows > height;
-      cv::resize(bgr, out, cv::Size(width, height), 0, 0, shrink ? cv::INTER_AREA : cv::INTER_LINEAR);
+      cv::resize(bgr, out, cv::Size(width, height), 0, 0,
+                 shrink ? cv::INTER_AREA : cv::INTER_LINEAR);
       return out;
     }
     case BackgroundKind::clutter:
@@ -453,7 +473,8 @@ cv::Mat background_image(const Background& b, int width, int height) {
 }
 
 cv::Mat cluttered_background(int width, int height, uint64_t seed) {
-  if (width <= 0 || height <= 0) fail("cluttered_background: image size ", width, "x", height, " must be positive");
+  if (width <= 0 || height <= 0)
+    fail("cluttered_background: image size ", width, "x", height, " must be positive");
   // cv::RNG treats state 0 specially; mixing the seed keeps every seed distinct.
   cv::RNG rng(seed * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull);
   // Every draw is its own statement: the order of evaluation of function arguments is
@@ -527,7 +548,8 @@ cv::Mat distance_transform(const cv::Mat& mask) {
     fail("distance_transform: expected a non-empty CV_8UC1 mask, got ",
          mask.empty() ? std::string("an empty image") : cv::typeToString(mask.type()));
   if (cv::countNonZero(mask) == 0)
-    return cv::Mat(mask.size(), CV_32FC1, cv::Scalar(std::hypot(double(mask.cols), double(mask.rows))));
+    return cv::Mat(mask.size(), CV_32FC1,
+                   cv::Scalar(std::hypot(double(mask.cols), double(mask.rows))));
   // cv::distanceTransform measures to the nearest zero pixel: make the person zero.
   const cv::Mat outside = mask == 0;
   cv::Mat dt;
@@ -537,8 +559,8 @@ cv::Mat distance_transform(const cv::Mat& mask) {
 
 double mask_iou(const cv::Mat& a, const cv::Mat& b) {
   if (a.type() != CV_8UC1 || b.type() != CV_8UC1 || a.size() != b.size())
-    fail("mask_iou: expected two CV_8UC1 masks of one size, got ", cv::typeToString(a.type()), " ", a.cols, "x",
-         a.rows, " and ", cv::typeToString(b.type()), " ", b.cols, "x", b.rows);
+    fail("mask_iou: expected two CV_8UC1 masks of one size, got ", cv::typeToString(a.type()), " ",
+         a.cols, "x", a.rows, " and ", cv::typeToString(b.type()), " ", b.cols, "x", b.rows);
   const cv::Mat fa = a != 0, fb = b != 0;
   const int inter = cv::countNonZero(fa & fb), uni = cv::countNonZero(fa | fb);
   return uni == 0 ? 1.0 : double(inter) / uni;

@@ -27,7 +27,8 @@ TriangleMesh sphere(double radius, const Eigen::Vector3d& c, int rings, int segm
     for (int j = 0; j <= segments; ++j) {
       const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
       const int k = i * (segments + 1) + j;
-      m.V.row(k) = c.transpose() + radius * Eigen::RowVector3d(std::sin(theta) * std::cos(phi), -std::cos(theta),
+      m.V.row(k) = c.transpose() + radius * Eigen::RowVector3d(std::sin(theta) * std::cos(phi),
+                                                               -std::cos(theta),
                                                                std::sin(theta) * std::sin(phi));
       m.uv.row(k) << double(j) / segments, double(i) / rings;
     }
@@ -35,7 +36,7 @@ TriangleMesh sphere(double radius, const Eigen::Vector3d& c, int rings, int segm
   for (int i = 0; i < rings; ++i)
     for (int j = 0; j < segments; ++j) {
       const int a = i * (segments + 1) + j, b = a + 1, c2 = a + segments + 1, d = c2 + 1;
-      if (i > 0) faces.emplace_back(a, c2, b);              // the other one is degenerate at the pole
+      if (i > 0) faces.emplace_back(a, c2, b);  // the other one is degenerate at the pole
       if (i < rings - 1) faces.emplace_back(b, c2, d);
     }
   m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
@@ -49,9 +50,11 @@ TriangleMesh box(const Eigen::Vector3d& c, const Eigen::Vector3d& h) {
   TriangleMesh m;
   m.V.resize(8, 3);
   for (int k = 0; k < 8; ++k)
-    m.V.row(k) << c.x() + (k & 1 ? h.x() : -h.x()), c.y() + (k & 2 ? h.y() : -h.y()), c.z() + (k & 4 ? h.z() : -h.z());
+    m.V.row(k) << c.x() + (k & 1 ? h.x() : -h.x()), c.y() + (k & 2 ? h.y() : -h.y()),
+        c.z() + (k & 4 ? h.z() : -h.z());
   m.F.resize(12, 3);
-  m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+  m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6,
+      1, 3, 5, 3, 7, 5;
   return m;
 }
 
@@ -122,7 +125,8 @@ cv::Mat opencv_silhouette(const Camera& cam, const std::vector<const TriangleMes
   constexpr int shift = 8;
   for (const TriangleMesh* m : meshes) {
     std::vector<cv::Point3d> world;
-    for (int i = 0; i < m->num_vertices(); ++i) world.emplace_back(m->V(i, 0), m->V(i, 1), m->V(i, 2));
+    for (int i = 0; i < m->num_vertices(); ++i)
+      world.emplace_back(m->V(i, 0), m->V(i, 1), m->V(i, 2));
     std::vector<cv::Point2d> image;
     cv::projectPoints(world, rvec, t, K, dist, image);
     for (int f = 0; f < m->num_faces(); ++f) {
@@ -142,7 +146,8 @@ cv::Mat opencv_silhouette(const Camera& cam, const std::vector<const TriangleMes
 
 // The same silhouette sampled at pixel centres, the renderer's convention: a pixel is
 // foreground when cv::pointPolygonTest puts its centre inside or on a projected triangle.
-cv::Mat centre_sampled_silhouette(const Camera& cam, const std::vector<const TriangleMesh*>& meshes) {
+cv::Mat centre_sampled_silhouette(const Camera& cam,
+                                  const std::vector<const TriangleMesh*>& meshes) {
   cv::Mat K, R, rvec, dist(1, 5, CV_64F), t(3, 1, CV_64F);
   cv::eigen2cv(cam.K, K);
   cv::eigen2cv(cam.R, R);
@@ -152,7 +157,8 @@ cv::Mat centre_sampled_silhouette(const Camera& cam, const std::vector<const Tri
   cv::Mat out = cv::Mat::zeros(cam.height, cam.width, CV_8UC1);
   for (const TriangleMesh* m : meshes) {
     std::vector<cv::Point3d> world;
-    for (int i = 0; i < m->num_vertices(); ++i) world.emplace_back(m->V(i, 0), m->V(i, 1), m->V(i, 2));
+    for (int i = 0; i < m->num_vertices(); ++i)
+      world.emplace_back(m->V(i, 0), m->V(i, 1), m->V(i, 2));
     std::vector<cv::Point2d> image;
     cv::projectPoints(world, rvec, t, K, dist, image);
     for (int f = 0; f < m->num_faces(); ++f) {
@@ -185,7 +191,8 @@ TEST(Renderer, MaskMatchesAnIndependentlyFilledSilhouette) {
   for (int ss : {1, 3}) {
     RenderOptions o;
     o.supersample = ss;
-    const RenderResult r = render(cam, {flat(ball, 1, {90, 120, 200}), flat(crate, 2, {200, 90, 40})}, o);
+    const RenderResult r =
+        render(cam, {flat(ball, 1, {90, 120, 200}), flat(crate, 2, {200, 90, 40})}, o);
     const cv::Mat expected = opencv_silhouette(cam, {&ball, &crate});
     const int area = cv::countNonZero(expected);
     ASSERT_GT(area, 0.1 * cam.width * cam.height);
@@ -200,7 +207,8 @@ TEST(Renderer, MaskMatchesAnIndependentlyFilledSilhouette) {
     size_t outline = 0;
     for (const auto& c : contours) outline += c.size();
     ASSERT_GT(outline, 1000u);
-    EXPECT_LT(cv::countNonZero(r.mask & ~expected), static_cast<int>(outline / 100)) << "supersample " << ss;
+    EXPECT_LT(cv::countNonZero(r.mask & ~expected), static_cast<int>(outline / 100))
+        << "supersample " << ss;
     cv::Mat differ;
     cv::bitwise_xor(r.mask, centre_sampled_silhouette(cam, {&ball, &crate}), differ);
     EXPECT_LT(cv::countNonZero(differ), static_cast<int>(outline / 100)) << "supersample " << ss;
@@ -219,7 +227,8 @@ TEST(Renderer, PixelCentresAreAtIntegerCoordinates) {
   cam.K(0, 2) = 0;
   cam.K(1, 2) = 0;
   // u ∈ [10.3, 20.3], v ∈ [5.6, 9.2]: pixel centres (x, y) inside are x 11..20, y 6..9.
-  const TriangleMesh q = quad({0.103, 0.056, 1}, {0.203, 0.056, 1}, {0.203, 0.092, 1}, {0.103, 0.092, 1});
+  const TriangleMesh q =
+      quad({0.103, 0.056, 1}, {0.203, 0.056, 1}, {0.203, 0.092, 1}, {0.103, 0.092, 1});
   const RenderResult r = render(cam, {flat(q, 1, {255, 255, 255})});
   cv::Mat expected = cv::Mat::zeros(20, 40, CV_8UC1);
   expected(cv::Range(6, 10), cv::Range(11, 21)).setTo(255);
@@ -249,7 +258,7 @@ TEST(Renderer, MeshesHaveNoCracksOrOverlaps) {
     owner.setTo(cv::Scalar(k + 1), mask);
   }
   const RenderResult whole = render(cam, {flat(fan, 1, {255, 255, 255})});
-  EXPECT_EQ(cv::countNonZero(whole.mask != (count > 0) ), 0);
+  EXPECT_EQ(cv::countNonZero(whole.mask != (count > 0)), 0);
   EXPECT_EQ(cv::countNonZero(count > 1), 0) << count;
   // No cracks: everything well inside the rim (radius 25 px) is covered.
   cv::Mat inner = cv::Mat::zeros(64, 64, CV_8UC1);
@@ -345,7 +354,8 @@ TEST(Renderer, DistanceTransformGrowsAwayFromTheMask) {
   cv::minMaxLoc(none, &lo, &hi);
   EXPECT_FLOAT_EQ(lo, 50.0f);
   EXPECT_FLOAT_EQ(hi, 50.0f);
-  expect_error([] { distance_transform(cv::Mat::zeros(4, 4, CV_32FC1)); }, {"distance_transform", "CV_8UC1"});
+  expect_error([] { distance_transform(cv::Mat::zeros(4, 4, CV_32FC1)); },
+               {"distance_transform", "CV_8UC1"});
 }
 
 // ---------------------------------------------------------------- colour
@@ -422,15 +432,18 @@ TEST(Renderer, VertexColoursLightingAndBackFaces) {
   TriangleMesh back = q;
   back.F << 0, 2, 1, 0, 3, 2;
   o.lighting.exposure = 1;
-  expect_colour(render(cam, {flat(back, 1, {100, 150, 200})}, o).rgb.at<cv::Vec3b>(120, 160), {100, 150, 200});
+  expect_colour(render(cam, {flat(back, 1, {100, 150, 200})}, o).rgb.at<cv::Vec3b>(120, 160),
+                {100, 150, 200});
   // A world light at 60° from the normal gives half its intensity: Lambert.
   o.lighting.headlight = 0;
   o.lighting.lights = {{Eigen::Vector3d(std::sin(M_PI / 3), 0, std::cos(M_PI / 3)), 1.0}};
-  expect_colour(render(cam, {flat(q, 1, {100, 150, 200})}, o).rgb.at<cv::Vec3b>(120, 160), {50, 75, 100});
+  expect_colour(render(cam, {flat(q, 1, {100, 150, 200})}, o).rgb.at<cv::Vec3b>(120, 160),
+                {50, 75, 100});
   // A light from behind the surface adds nothing.
   o.lighting.ambient = 0.2;
   o.lighting.lights = {{Eigen::Vector3d(0, 0, -1), 1.0}};
-  expect_colour(render(cam, {flat(q, 1, {100, 150, 200})}, o).rgb.at<cv::Vec3b>(120, 160), {20, 30, 40});
+  expect_colour(render(cam, {flat(q, 1, {100, 150, 200})}, o).rgb.at<cv::Vec3b>(120, 160),
+                {20, 30, 40});
 }
 
 TEST(Renderer, SupersamplingSmoothsEdgesButKeepsMasksBinary) {
@@ -585,7 +598,8 @@ TEST(Renderer, BadInputThrowsWithAClearMessage) {
   expect_error([&] { render(cam, {ok}, o); }, {"background", "empty"});
   o.background.image = cv::Mat(4, 4, CV_16UC3, cv::Scalar::all(0));
   expect_error([&] { render(cam, {ok}, o); }, {"background", "CV_16UC3"});
-  expect_error([] { mask_iou(cv::Mat::zeros(4, 4, CV_8UC1), cv::Mat::zeros(4, 5, CV_8UC1)); }, {"mask_iou"});
+  expect_error([] { mask_iou(cv::Mat::zeros(4, 4, CV_8UC1), cv::Mat::zeros(4, 5, CV_8UC1)); },
+               {"mask_iou"});
 }
 
 TEST(Renderer, SkipsTrianglesBehindTheCamera) {
@@ -594,7 +608,7 @@ TEST(Renderer, SkipsTrianglesBehindTheCamera) {
   const Camera cam = pinhole_camera(100, 64, 64);
   TriangleMesh m;
   m.V.resize(6, 3);
-  m.V << -1, -1, 2, 1, -1, 2, 0, 1, -1,   // crosses z = 0
+  m.V << -1, -1, 2, 1, -1, 2, 0, 1, -1,  // crosses z = 0
       -0.2, -0.2, 3, 0.2, -0.2, 3, 0, 0.2, 3;
   m.F.resize(2, 3);
   m.F << 0, 1, 2, 3, 4, 5;
