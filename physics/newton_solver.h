@@ -1,9 +1,14 @@
 #pragma once
 // Minimises a sum of energies by Newton's method: a fixed-pattern sparse Hessian, a
-// CHOLMOD solve (symbolic analysis once), adaptive regularisation H + δI (δ grows when
+// CHOLMOD solve (symbolic analysis once), exact element Hessians where they are PSD
+// with a fallback to the energies' PSD corrections (Energy::add_hessian_correction) when
+// the sum is not positive definite, then adaptive regularisation H + δI (δ grows when
 // the factorisation fails, the direction is not a descent direction or the line search
-// fails, and shrinks after a success) and an Armijo back-tracking line search. The
-// solver never leaves x non-finite: a failed iteration keeps the last accepted iterate.
+// fails, and shrinks after a success); a step filter (Energy::max_step), an Armijo
+// back-tracking line search and doubling of accepted full steps. Converged when every
+// vertex's residual is below the tolerance relative to its force scale. The solver never
+// leaves x non-finite: a failed iteration keeps the last accepted iterate, which has the
+// lowest energy reached.
 #include <memory>
 #include <string>
 #include <vector>
