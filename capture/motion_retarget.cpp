@@ -556,6 +556,39 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
     return low;
   };
   const double target_floor = lowest_target(rest);
+  // Feet for the floor: mapped joints near the bottom of each skeleton in its standing
+  // pose (within 15% of its height: feet, not hands), and the floor markers. Each keeps its
+  // own standing height, so a heel strike lowers the heel to its standing height, not to
+  // the toes' height.
+  std::vector<std::pair<int, double>> target_feet;  // joint, rest height (units)
+  for (int b : res.target_mapped)
+    if (rest[b].translation()(up) <= target_floor + 0.15 * out.target_height)
+      target_feet.emplace_back(b, rest[b].translation()(up));
+  std::vector<std::pair<int, double>> source_feet;  // joint, standing height (m)
+  {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int a : res.source_mapped) {
+      const double h = (m.source_to_target * zero[a].translation())(up);
+      lo = std::min(lo, h), hi = std::max(hi, h);
+    }
+    for (int a : res.source_mapped) {
+      const double h = (m.source_to_target * zero[a].translation())(up);
+      if (h <= lo + 0.15 * (hi - lo)) source_feet.emplace_back(a, (h - lo) * m.source_metres_per_unit);
+    }
+  }
+  auto marker_height = [&](const Transforms& G, int mk) {
+    const Marker& marker = s.markers[mk];
+    return (G[marker.joint] * (zero_pose[marker.joint].inverse(Eigen::Isometry) * marker.offset))(up);
+  };
+  std::vector<double> marker_rest;
+  for (int mk : floor_markers) marker_rest.push_back(marker_height(rest, mk));
+  // How far the character's feet are above their standing heights (units).
+  auto target_clearance = [&](const Transforms& G) {
+    double c = std::numeric_limits<double>::infinity();
+    for (const auto& [b, h] : target_feet) c = std::min(c, G[b].translation()(up) - h);
+    for (size_t i = 0; i < floor_markers.size(); ++i) c = std::min(c, marker_height(G, floor_markers[i]) - marker_rest[i]);
+    return c;
+  };
   out.source_floor_m = source_floor_m;
   out.target_floor = target_floor;
   Eigen::Vector3d target_root_rest = Eigen::Vector3d::Zero();
@@ -611,8 +644,9 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
       // Feet: the character's lowest mapped joint goes where the source's is (scaled),
       // whatever the two skeletons' leg proportions; the hip-height target alone leaves
       // a character with relatively shorter legs floating. Only the root height moves.
-      const double low = lowest_target(forward_kinematics(s, q));
-      t.root(up) += target_floor + k * (lowest_mapped(src[f]) - source_floor_m) / metres_per_unit - low;
+      double source_clearance = std::numeric_limits<double>::infinity();  // metres
+      for (const auto& [a, h] : source_feet) source_clearance = std::min(source_clearance, src[f][a](up) - (source_floor_m + h));
+      t.root(up) += k * source_clearance / metres_per_unit - target_clearance(forward_kinematics(s, q));
       solver.solve(q, t, out.solved_dofs, previous, rest_dofs, m.iterations);
     }
     out.motion.dofs.row(f) = q.transpose();

