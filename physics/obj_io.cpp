@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "graph/atomic_file.h"
 #include "graph/error.h"
 
 namespace weft::physics {
@@ -52,23 +53,6 @@ TriangleMesh read_obj(const std::string& path) {
   return mesh;
 }
 
-void write_file_atomically(const std::string& path, const std::string& contents) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    WEFT_CHECK(out.good(), tmp, ": cannot open for writing");
-    out << contents;
-    out.flush();
-    WEFT_CHECK(out.good(), tmp, ": write failed");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp);
-    fail(path, ": cannot rename the temporary file into place: ", ec.message());
-  }
-}
-
 void write_obj(const std::string& path, const Eigen::VectorXd& x,
                const std::vector<std::array<int, 3>>& faces) {
   std::string s;
@@ -82,7 +66,7 @@ void write_obj(const std::string& path, const Eigen::VectorXd& x,
     std::snprintf(buf, sizeof(buf), "f %d %d %d\n", f[0] + 1, f[1] + 1, f[2] + 1);
     s += buf;
   }
-  write_file_atomically(path, s);
+  write_text_atomically(path, s);
 }
 
 }  // namespace weft::physics

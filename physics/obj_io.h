@@ -21,7 +21,4 @@ TriangleMesh read_obj(const std::string& path);
 void write_obj(const std::string& path, const Eigen::VectorXd& positions,
                const std::vector<std::array<int, 3>>& faces);
 
-// Writes `contents` to `path` through a temporary file and a rename.
-void write_file_atomically(const std::string& path, const std::string& contents);
-
 }  // namespace weft::physics

@@ -1,5 +1,6 @@
 #include "physics/scene.h"
 
+
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "graph/atomic_file.h"
 #include "graph/error.h"
 
 namespace weft::physics {
@@ -408,7 +410,7 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
       {"oob_force_max_rel", oob_max_rel}};
   const nlohmann::json doc = {{"frames", frames}, {"summary", summary}};
   run.metrics_json = doc.dump(2);
-  if (!out_dir.empty()) write_file_atomically((fs::path(out_dir) / "metrics.json").string(), run.metrics_json);
+  if (!out_dir.empty()) write_text_atomically((fs::path(out_dir) / "metrics.json").string(), run.metrics_json);
   return run;
 }
 
