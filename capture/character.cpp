@@ -9,6 +9,7 @@
 
 #include "capture/automatic_weights.h"
 #include "capture/mesh_io.h"
+#include "capture/strict_yaml.h"
 #include "capture/skeletool_io.h"
 #include "capture/text_reader.h"
 #include "graph/error.h"
@@ -30,47 +31,6 @@ std::vector<int> read_index_list(const std::string& path) {
 }
 
 namespace {
-
-// ----------------------------------------------------------------- YAML helpers
-
-struct YamlContext {
-  std::string file;  // display name
-  fs::path dir;      // paths are relative to the yaml's folder
-
-  [[noreturn]] void fail_at(const YAML::Node& node, const std::string& key, const std::string& msg) const {
-    const YAML::Mark m = node.Mark();
-    if (m.line >= 0) weft::fail(file, ":", m.line + 1, ": ", key, ": ", msg);
-    weft::fail(file, ": ", key, ": ", msg);
-  }
-  void check_keys(const YAML::Node& map, const std::string& where, std::initializer_list<const char*> known) const {
-    if (!map.IsMap()) fail_at(map, where, "expected a map");
-    for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
-      bool ok = false;
-      for (const char* k : known) ok = ok || key == k;
-      if (!ok) {
-        std::string list;
-        for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
-        fail_at(kv.first, where.empty() ? key : where + "." + key, "unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-  template <class T>
-  T get(const YAML::Node& node, const std::string& key, const char* what) const {
-    try {
-      return node.as<T>();
-    } catch (const YAML::Exception&) {
-      fail_at(node, key, std::string("expected ") + what);
-    }
-  }
-  std::string path(const YAML::Node& node, const std::string& key) const {
-    const std::string p = get<std::string>(node, key, "a file path");
-    if (p.empty()) fail_at(node, key, "empty path");
-    const fs::path full = (dir / p).lexically_normal();
-    if (!fs::exists(full)) fail_at(node, key, "file not found: " + full.string());
-    return full.string();
-  }
-};
 
 int find_joint_or_marker(const Skeleton& s, const std::string& name, LandmarkSource& src) {
   if (const int j = s.joint_index(name); j >= 0) {
@@ -96,7 +56,7 @@ std::vector<int> inactive_faces_from_labels(const TriangleMesh& mesh, const std:
 }
 
 // Loads one mesh section (body or cloth).
-CharacterMesh load_mesh_section(const YamlContext& ctx, const YAML::Node& node, const std::string& section,
+CharacterMesh load_mesh_section(const StrictYaml& ctx, const YAML::Node& node, const std::string& section,
                                 const Character& ch, const CharacterMesh* body_for_transfer,
                                 std::vector<int>* inactive_faces, std::vector<int>* anchors) {
   if (section == "body")
@@ -207,7 +167,7 @@ void finish_character(Character& ch) {
 }  // namespace
 
 Character load_character_yaml(const std::string& path) {
-  YamlContext ctx{display_name(path), fs::path(path).parent_path()};
+  StrictYaml ctx{display_name(path), fs::path(path).parent_path()};
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);

@@ -8,60 +8,13 @@
 #include <set>
 
 #include "capture/character.h"
+#include "capture/strict_yaml.h"
 #include "capture/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {
 
 namespace {
-
-// ----------------------------------------------------------------- YAML (strict keys)
-
-struct Yaml {
-  std::string file;  // display name
-
-  [[noreturn]] void fail_at(const YAML::Node& node, const std::string& key, const std::string& msg) const {
-    const YAML::Mark m = node.Mark();
-    if (m.line >= 0) weft::fail(file, ":", m.line + 1, ": ", key, ": ", msg);
-    weft::fail(file, ": ", key, ": ", msg);
-  }
-  void check_keys(const YAML::Node& map, const std::string& where, std::initializer_list<const char*> known) const {
-    if (!map.IsMap()) fail_at(map, where.empty() ? "(top level)" : where, "expected a mapping");
-    for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
-      if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; })) {
-        std::string list;
-        for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
-        fail_at(kv.first, where.empty() ? key : where + "." + key, "unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-  template <class T>
-  T get(const YAML::Node& node, const std::string& key, const char* what) const {
-    if (!node.IsScalar()) fail_at(node, key, std::string("expected ") + what);
-    try {
-      return node.as<T>();
-    } catch (const YAML::Exception&) {
-      fail_at(node, key, std::string("expected ") + what + ", found '" + node.Scalar() + "'");
-    }
-  }
-  double number(const YAML::Node& node, const std::string& key) const {
-    const double v = get<double>(node, key, "a number");
-    if (!std::isfinite(v)) fail_at(node, key, "expected a finite number");
-    return v;
-  }
-  double positive(const YAML::Node& node, const std::string& key) const {
-    const double v = number(node, key);
-    if (!(v > 0)) fail_at(node, key, "expected a number > 0");
-    return v;
-  }
-  std::vector<std::string> strings(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsSequence()) fail_at(node, key, "expected a list of names");
-    std::vector<std::string> out;
-    for (const auto& n : node) out.push_back(get<std::string>(n, key, "a name"));
-    return out;
-  }
-};
 
 // '*' matches any run of characters (dof name patterns in fixed_dofs).
 bool glob_match(std::string_view pattern, std::string_view name) {
@@ -74,7 +27,7 @@ bool glob_match(std::string_view pattern, std::string_view name) {
   return !name.empty() && pattern[0] == name[0] && glob_match(pattern.substr(1), name.substr(1));
 }
 
-Eigen::Matrix3d parse_axes(const Yaml& y, const YAML::Node& node) {
+Eigen::Matrix3d parse_axes(const StrictYaml& y, const YAML::Node& node) {
   const std::vector<std::string> axes = y.strings(node, "source_axes");
   if (axes.size() != 3) y.fail_at(node, "source_axes", "expected 3 entries like [-x, y, -z]");
   Eigen::Matrix3d R = Eigen::Matrix3d::Zero();
@@ -347,13 +300,8 @@ Resolved resolve(const BvhMotion& motion, const RetargetMapping& m, const Skelet
 // ----------------------------------------------------------------- mapping files
 
 RetargetMapping parse_retarget_mapping(const std::string& text, const std::string& name) {
-  const Yaml y{display_name(name)};
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    fail(y.file, ":", e.mark.line + 1, ": invalid YAML: ", e.msg);
-  }
+  const StrictYaml y{display_name(name)};
+  const YAML::Node root = y.parse(text);
   RetargetMapping m;
   m.file = name;
   try {

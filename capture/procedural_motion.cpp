@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "capture/text_reader.h"
+#include "capture/strict_yaml.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -258,42 +259,7 @@ Pose segment_pose(const MotionSegment& s, double u, double tau) {
   return p;
 }
 
-// ----------------------------------------------------------------- YAML (strict keys)
-
-struct Yaml {
-  std::string file;
-  [[noreturn]] void fail_at(const YAML::Node& node, const std::string& key, const std::string& msg) const {
-    const YAML::Mark m = node.Mark();
-    if (m.line >= 0) weft::fail(file, ":", m.line + 1, ": ", key, ": ", msg);
-    weft::fail(file, ": ", key, ": ", msg);
-  }
-  void check_keys(const YAML::Node& map, const std::string& where, const std::vector<const char*>& known) const {
-    if (!map.IsMap()) fail_at(map, where.empty() ? "(top level)" : where, "expected a mapping");
-    for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
-      if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; })) {
-        std::string list;
-        for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
-        fail_at(kv.first, where.empty() ? key : where + "." + key, "unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-  double number(const YAML::Node& n, const std::string& key, double lo, double hi) const {
-    if (!n.IsScalar()) fail_at(n, key, "expected a number");
-    double v = 0;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail_at(n, key, "expected a number, found '" + n.Scalar() + "'");
-    }
-    if (!std::isfinite(v) || v < lo || v > hi)
-      fail_at(n, key, "expected a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], found " +
-                          n.Scalar());
-    return v;
-  }
-};
-
-void parse_spec_body(const Yaml& y, const YAML::Node& root, MotionSpec& spec);
+void parse_spec_body(const StrictYaml& y, const YAML::Node& root, MotionSpec& spec);
 
 }  // namespace
 
@@ -316,13 +282,8 @@ double MotionSpec::duration_s() const {
 }
 
 MotionSpec parse_motion_spec(const std::string& text, const std::string& name) {
-  const Yaml y{display_name(name)};
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    fail(y.file, ":", e.mark.line + 1, ": invalid YAML: ", e.msg);
-  }
+  const StrictYaml y{display_name(name)};
+  const YAML::Node root = y.parse(text);
   MotionSpec spec;
   spec.file = name;
   try {
@@ -335,7 +296,7 @@ MotionSpec parse_motion_spec(const std::string& text, const std::string& name) {
 
 namespace {
 
-void parse_spec_body(const Yaml& y, const YAML::Node& root, MotionSpec& spec) {
+void parse_spec_body(const StrictYaml& y, const YAML::Node& root, MotionSpec& spec) {
   y.check_keys(root, "", {"name", "fps", "transition", "segments"});
   spec.name = root["name"] ? root["name"].as<std::string>()
                            : std::filesystem::path(spec.file).stem().string();
