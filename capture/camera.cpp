@@ -48,6 +48,14 @@ cv::Mat read_matrix(const cv::FileNode& node, const std::string& where, const ch
                     std::initializer_list<int> cols) {
   const cv::FileNode n = node[key];
   if (n.empty()) fail(where, ": missing key '", key, "'");
+  // The declared size is checked before OpenCV allocates it: a corrupt `rows: 400000000`
+  // must be an error, not an attempt to allocate gigabytes.
+  if (!n.isMap() || !n["rows"].isInt() || !n["cols"].isInt())
+    fail(where, ": key '", key, "' is not an OpenCV matrix (!!opencv-matrix with rows, cols, dt, data)");
+  const int declared_rows = static_cast<int>(n["rows"]), declared_cols = static_cast<int>(n["cols"]);
+  if (declared_rows < 1 || declared_rows > 5 || declared_cols < 1 || declared_cols > 5)
+    fail(where, ": key '", key, "' declares size ", declared_rows, "x", declared_cols, ", expected ",
+         rows, "x", *cols.begin());
   cv::Mat m;
   try {
     n >> m;
