@@ -9,13 +9,16 @@
 // the torso, 0.15 m) in front of it: a joint facing the camera has only its own flesh in
 // front and stays visible, a joint behind the torso, the head or the other leg has a whole
 // body part in front and is occluded. On the default character in its rest pose, seen by
-// the 8-view rig, a joint's own flesh is 0.02–0.13 m deep, while the far shoulder, hip and
-// knee of a side view are 0.26–0.71 m behind the surface. Where nothing is rendered at the
-// pixel (depth 0, e.g. just outside a thin limb's silhouette) the keypoint is visible.
+// the 8-view rig, joints facing a camera are at most 0.13 m under the surface, the far
+// shoulder, hip and knee of a side view 0.26–0.71 m, the nose from behind 0.18 m; the
+// pelvis centre seen from the side (0.16 m) counts as hidden. Where nothing is rendered
+// at the pixel (depth 0, e.g. just outside a thin limb's silhouette) the keypoint is
+// visible.
 #include <opencv2/core.hpp>
 
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "capture/camera.h"
 #include "capture/mesh.h"

@@ -23,7 +23,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // spread over the body, left/right spread in x; two keypoints unmapped (NaN).
 Vertices stick_figure() {
   Vertices p(kBody25Count, 3);
-  for (int k = 0; k < kBody25Count; ++k) p.row(k) << 0.3 * std::sin(1.7 * k), 0.05 + 1.55 * k / 24.0, 0.05 * std::cos(k);
+  for (int k = 0; k < kBody25Count; ++k)
+    p.row(k) << 0.3 * std::sin(1.7 * k), 0.05 + 1.55 * k / 24.0, 0.05 * std::cos(k);
   p.row(17).setConstant(kNaN);  // REar
   p.row(18).setConstant(kNaN);  // LEar
   return p;
