@@ -42,9 +42,10 @@ void run_synth(const SynthArgs& a) {
     oob = std::max(oob, r.oob_force_max_rel);
   }
   if (cfg.simulation.enabled)
-    spdlog::info("simulation: {:.1f} s ({:.0f} ms/frame), {} Newton iterations, {} frames at the iteration cap, "
+    spdlog::info("simulation: {:.1f} s ({:.0f} ms per simulated frame, settling included), {} Newton iterations, {} frames at the iteration cap, "
                  "{} failed; deepest penetration {:.1f} mm, worst out-of-balance force {:.3f} m g",
-                 s.seconds_simulation, 1e3 * s.seconds_simulation / std::max(1, s.frames - 1), newton, unconverged,
+                 s.seconds_simulation,
+                 1e3 * s.seconds_simulation / std::max(1, cfg.simulation.settle_frames + s.frames - 1), newton, unconverged,
                  s.failed_frames, 1e3 * pen, oob);
   spdlog::info("rendering: {} views of {} frames = {} images in {:.1f} s ({:.0f} views/s), writing {:.1f} s",
                s.views, s.frames, s.images, s.seconds_rendering, s.views_per_second(), s.seconds_writing);

@@ -34,7 +34,8 @@ struct SynthMotionConfig {
 
 struct SynthSimulationConfig {
   bool enabled = true;     // false: the garment is skinned, not simulated
-  int substeps = 2;        // implicit Euler steps per frame
+  int substeps = 1;        // implicit Euler steps per frame (> 1: the frame-level out-of-balance
+                           // force then includes the sub-stepping error)
   int settle_frames = 15;  // frames simulated at the first pose before the motion starts
   physics::ClothMaterial material{0.15, 2.0e5, 0.3, 2.0e-6, 0.001};
   double collision_thickness = 0.004;  // m

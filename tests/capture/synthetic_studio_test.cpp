@@ -1,0 +1,73 @@
+// `weft synth` configs: what a user gets for a typo, a wrong type or a missing file.
+#include <gtest/gtest.h>
+
+#include "capture/synthetic_studio.h"
+#include "tests/capture/test_files.h"
+
+using namespace weft::capture;
+using weft::capture::testing::expect_error;
+using weft::capture::testing::ScratchDir;
+
+namespace {
+
+std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
+
+std::string base(const std::string& extra = "", const std::string& motion_extra = "") {
+  return "name: t\n"
+         "character: " + repo_file("configs/characters/makehuman_skirt_coarse.yaml") + "\n" +
+         "motion:\n"
+         "  procedural: " + repo_file("configs/motions/walk_in_place.yaml") + "\n" +
+         "  mapping: " + repo_file("configs/retarget/humanoid_to_makehuman.yaml") + "\n" + motion_extra + extra;
+}
+
+}  // namespace
+
+TEST(SynthConfig, ShippedConfigsLoad) {
+  for (const char* name : {"tiny", "training", "in_the_wild"}) {
+    const SynthConfig c = load_synth_config(repo_file(std::string("configs/synth/") + name + ".yaml"));
+    EXPECT_EQ(c.name, name);
+    EXPECT_GT(c.motion.frames, 0);
+  }
+  const SynthConfig wild = load_synth_config(repo_file("configs/synth/in_the_wild.yaml"));
+  EXPECT_EQ(wild.cameras.kind, CameraRigKind::wild);
+  EXPECT_EQ(wild.render.background, BackgroundKind::clutter);
+  const SynthConfig tiny = load_synth_config(repo_file("configs/synth/tiny.yaml"));
+  EXPECT_EQ(tiny.cameras.kind, CameraRigKind::studio);
+  EXPECT_EQ(tiny.cameras.studio.views, 8);
+  EXPECT_EQ(tiny.cameras.studio.width, 256);
+}
+
+TEST(SynthConfig, DefaultsAndOverrides) {
+  const SynthConfig c = parse_synth_config(
+      base("seed: 42\nsimulation: {substeps: 3, material: {density: 0.3}}\ncameras: {views: 18, height: 320}\n"
+           "keypoints: {noise_px: 0.5}\nsplits: {val: 0.2, test: 0}\n",
+           "  frames: 20\n  start: 2\n"),
+      "c.yaml");
+  EXPECT_EQ(c.seed, 42u);
+  EXPECT_EQ(c.motion.frames, 20);
+  EXPECT_DOUBLE_EQ(c.motion.start_s, 2);
+  EXPECT_EQ(c.simulation.substeps, 3);
+  EXPECT_DOUBLE_EQ(c.simulation.material.density, 0.3);
+  EXPECT_EQ(c.cameras.studio.views, 18);
+  EXPECT_EQ(c.cameras.studio.height, 320);
+  EXPECT_EQ(c.cameras.studio.width, 512);
+  EXPECT_DOUBLE_EQ(c.keypoints.noise_px, 0.5);
+  EXPECT_DOUBLE_EQ(c.val_fraction, 0.2);
+  EXPECT_DOUBLE_EQ(c.test_fraction, 0);
+}
+
+TEST(SynthConfig, ErrorsNameTheFileAndKey) {
+  expect_error([] { parse_synth_config(base("colour: red\n"), "bad.yaml"); }, {"bad.yaml", "colour"});
+  expect_error([] { parse_synth_config(base("cameras: {views: many}\n"), "bad.yaml"); }, {"bad.yaml", "cameras.views"});
+  expect_error([] { parse_synth_config(base("cameras: {rig: drone}\n"), "bad.yaml"); }, {"cameras.rig", "drone"});
+  expect_error([] { parse_synth_config(base("cameras: {rig: wild, views: 3}\n"), "bad.yaml"); }, {"views"});
+  expect_error([] { parse_synth_config(base("simulation: {material: {poisson_ratio: 0.5}}\n"), "bad.yaml"); },
+               {"bad.yaml", "poisson_ratio"});
+  expect_error([] { parse_synth_config(base("keypoints: {dropout: 1.5}\n"), "bad.yaml"); }, {"keypoints.dropout"});
+  expect_error([] { parse_synth_config(base("render: {background: blue}\n"), "bad.yaml"); }, {"render.background"});
+  expect_error([] { parse_synth_config(base("splits: {val: 0.6, test: 0.6}\n"), "bad.yaml"); }, {"splits"});
+  expect_error([] { parse_synth_config(base("", "  bvh: /nonexistent/clip.bvh\n"), "bad.yaml"); }, {"motion"});
+  expect_error([] { parse_synth_config("name: t\ncharacter: /nonexistent.yaml\nmotion: {}\n", "bad.yaml"); },
+               {"bad.yaml", "character"});
+  expect_error([] { load_synth_config("/nonexistent/synth.yaml"); }, {"/nonexistent/synth.yaml"});
+}
