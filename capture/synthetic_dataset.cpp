@@ -10,6 +10,8 @@
 #include <random>
 #include <set>
 
+#include <tbb/global_control.h>
+
 #include "capture/renderer.h"
 #include "capture/strict_yaml.h"
 #include "capture/text_reader.h"
@@ -452,18 +454,25 @@ PrefetchOptions checked(const PrefetchOptions& o) {
   if (o.loader_threads < 0) fail("DatasetPrefetcher: loader_threads must be ≥ 0, got ", o.loader_threads);
   return o;
 }
+
+// Loader slots plus one for the thread that waits in the destructor, capped by TBB's
+// thread limit (cores, or a tbb::global_control): asking for more only earns a warning.
+int loader_arena_size(int loader_threads) {
+  const int limit = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  return std::max(1, std::min(loader_threads + 1, limit));
+}
 }  // namespace
 
 DatasetPrefetcher::DatasetPrefetcher(const SyntheticDataset& dataset, PrefetchOptions options)
     : dataset_(dataset),
       options_(checked(options)),
-      // One slot for the thread that waits in the destructor, the others for loaders.
-      arena_(options_.loader_threads + 1, 1) {
+      arena_(loader_arena_size(options_.loader_threads), 1) {
   const int64_t n = dataset_.size(), bs = options_.batch_size;
   if (n == 0) fail("DatasetPrefetcher: split '", dataset_.options().split, "' of ", dataset_.info().dir, " is empty");
   batches_per_epoch_ = options_.drop_last ? n / bs : (n + bs - 1) / bs;
   if (batches_per_epoch_ == 0)
     fail("DatasetPrefetcher: batch_size ", bs, " with drop_last exceeds the split's ", n, " samples");
+  loaders_ = loader_arena_size(options_.loader_threads) - 1;
   while (scheduled_ < options_.batches_ahead) schedule(scheduled_);
 }
 
@@ -488,7 +497,7 @@ void DatasetPrefetcher::schedule(int64_t batch) {
     slots_.emplace(batch, std::move(slot));
   }
   scheduled_ = batch + 1;
-  if (options_.loader_threads > 0) arena_.enqueue(group_.defer([this] { load_first_pending(); }));
+  if (loaders_ > 0) arena_.enqueue(group_.defer([this] { load_first_pending(); }));
 }
 
 void DatasetPrefetcher::load_first_pending() {

@@ -175,7 +175,8 @@ struct PrefetchOptions {
   int batch_size = 8;
   uint64_t seed = 0;       // the shuffle: epoch e's order is a function of (seed, e) only
   int batches_ahead = 2;   // batches loaded or loading ahead of the one next() returns (≥ 1)
-  int loader_threads = 1;  // TBB threads loading batches in the background
+  int loader_threads = 1;  // TBB threads loading in the background (0: next() loads; capped by
+                           // TBB's thread limit, e.g. a tbb::global_control, minus the caller)
   bool drop_last = false;  // drop an epoch's last, smaller batch
 };
 
@@ -213,6 +214,7 @@ class DatasetPrefetcher {
 
   const SyntheticDataset& dataset_;
   PrefetchOptions options_;
+  int loaders_ = 0;  // background loaders: loader_threads capped by TBB's thread limit
   int64_t batches_per_epoch_ = 0;
   int64_t next_batch_ = 0;  // the batch the next call of next() returns
   int64_t scheduled_ = 0;   // batches [0, scheduled_) have had slots

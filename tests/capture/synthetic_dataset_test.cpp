@@ -486,24 +486,27 @@ TEST(DatasetPrefetcher, OrderDependsOnSeedAloneNotOnThreads) {
   o.batch_size = 5;  // 12 samples: batches of 5, 5, 2
   o.seed = 11;
   o.batches_ahead = 3;
-  std::vector<std::pair<int64_t, int>> one_thread, two_threads, again, caller_only;
+  std::vector<std::pair<int64_t, int>> one_thread, two_threads, again, caller_only, more_loaders;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     o.loader_threads = 1;
     one_thread = stream(train, o, 7);
   }
   {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    o.loader_threads = 2;
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);  // caller + 1 loader
+    o.loader_threads = 1;
     two_threads = stream(train, o, 7);
     again = stream(train, o, 7);
   }
-  o.loader_threads = 0;
+  o.loader_threads = 0;  // everything on the calling thread
   caller_only = stream(train, o, 7);
+  o.loader_threads = 3;  // more loaders than cores
+  more_loaders = stream(train, o, 7);
   ASSERT_EQ(one_thread.size(), 12u * 2 + 5);
   EXPECT_EQ(one_thread, two_threads);
   EXPECT_EQ(two_threads, again);
   EXPECT_EQ(two_threads, caller_only);
+  EXPECT_EQ(two_threads, more_loaders);
 
   // Every sample once per epoch, in a new order each epoch.
   std::vector<int> epoch0, epoch1;
@@ -587,7 +590,8 @@ TEST(DatasetPrefetcher, StopsCleanlyWithBatchesInFlight) {
     EXPECT_EQ(p.next().size(), 2);
   }
   {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);  // no workers
+    o.loader_threads = 1;
     DatasetPrefetcher p(train, o);
     EXPECT_EQ(p.next().size(), 2);
   }
