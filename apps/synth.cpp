@@ -17,11 +17,15 @@ namespace {
 struct SynthArgs {
   std::string config, out;
   long long seed = -1;
+  int frames = 0;
+  bool skin_only = false;
 };
 
 void run_synth(const SynthArgs& a) {
   capture::SynthConfig cfg = capture::load_synth_config(a.config);
   if (a.seed >= 0) cfg.seed = static_cast<uint64_t>(a.seed);
+  if (a.frames > 0) cfg.motion.frames = a.frames;
+  if (a.skin_only) cfg.simulation.enabled = false;
   spdlog::info("synth '{}': {} frames at {} fps, seed {}, character {}", cfg.name, cfg.motion.frames,
                cfg.motion.fps, cfg.seed, cfg.character);
   std::map<std::string, std::unique_ptr<ProgressBar>> bars;
@@ -70,6 +74,11 @@ void add_synth_command(CLI::App& app) {
       ->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "Output folder (created if missing)")->required();
   cmd->add_option("--seed", args->seed, "Overrides the config's seed");
+  cmd->add_option("--frames", args->frames, "Overrides motion.frames (e.g. a quick look at a big config)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--skin-only", args->skin_only,
+                "Skin the garment instead of simulating it (simulation.enabled: false): fast previews and "
+                "rendering benchmarks; the cloth is then not ground truth");
   cmd->callback([args] { run_synth(*args); });
 }
 
