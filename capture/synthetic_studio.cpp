@@ -278,12 +278,22 @@ Vertices to_vertices(const physics::Positions& x, double metres_per_unit) {
   return V;
 }
 
-// A contact sheet of one frame: every view (at most 4 columns, tiles of at most 256 px)
-// with its keypoints drawn (green visible, orange low confidence) and the mask outline.
-cv::Mat preview_sheet(const fs::path& out, const std::vector<std::string>& views, int frame) {
-  const int n = static_cast<int>(views.size()), cols = std::min(n, 4), rows = (n + cols - 1) / cols;
+// A contact sheet (at most 4 columns, tiles of at most 256 px) with keypoints drawn (green
+// visible, orange low confidence) and mask outlines: every view of the middle frame, or
+// with fewer than 4 views (a moving camera) up to 8 frames spread over the sequence.
+cv::Mat preview_sheet(const fs::path& out, const std::vector<std::string>& views, int frames) {
+  std::vector<std::pair<int, int>> tiles;  // (view, frame)
+  if (views.size() >= 4) {
+    for (int v = 0; v < static_cast<int>(views.size()); ++v) tiles.push_back({v, frames / 2});
+  } else {
+    const int shown = std::min(frames, 8);
+    for (int v = 0; v < static_cast<int>(views.size()); ++v)
+      for (int i = 0; i < shown; ++i) tiles.push_back({v, shown > 1 ? i * (frames - 1) / (shown - 1) : 0});
+  }
+  const int n = static_cast<int>(tiles.size()), cols = std::min(n, 4), rows = (n + cols - 1) / cols;
   cv::Mat sheet;
-  for (int v = 0; v < n; ++v) {
+  for (int t = 0; t < n; ++t) {
+    const int v = tiles[t].first, frame = tiles[t].second;
     cv::Mat image = cv::imread(frame_file(out / "images", views[v], frame, ".png"), cv::IMREAD_COLOR);
     const cv::Mat mask = cv::imread(frame_file(out / "masks", views[v], frame, ".png"), cv::IMREAD_GRAYSCALE);
     WEFT_CHECK(!image.empty() && !mask.empty(), out.string(), ": cannot read back frame ", frame, " of ", views[v]);
@@ -298,9 +308,10 @@ cv::Mat preview_sheet(const fs::path& out, const std::vector<std::string>& views
                      p(k, 2) >= 0.6 ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 140, 255), cv::FILLED);
     const double scale = std::min(1.0, 256.0 / std::max(image.cols, image.rows));
     if (scale < 1) cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);
-    cv::putText(image, views[v], cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1);
+    cv::putText(image, views[v] + " " + dataset_frame_name(frame), cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(255, 255, 255), 1);
     if (sheet.empty()) sheet = cv::Mat(rows * image.rows, cols * image.cols, CV_8UC3, cv::Scalar(0, 0, 0));
-    image.copyTo(sheet(cv::Rect((v % cols) * image.cols, (v / cols) * image.rows, image.cols, image.rows)));
+    image.copyTo(sheet(cv::Rect((t % cols) * image.cols, (t / cols) * image.rows, image.cols, image.rows)));
   }
   return sheet;
 }
@@ -580,7 +591,7 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
   summary.seconds_rendering = busy > 0 ? render_wall * render_seconds / busy : 0;
   summary.seconds_writing = busy > 0 ? render_wall * write_seconds / busy : 0;
 
-  write_png((out / "preview.png").string(), preview_sheet(out, views, frames / 2));
+  write_png((out / "preview.png").string(), preview_sheet(out, views, frames));
 
   // Ground-truth meshes.
   for (int f = 0; f < frames; ++f) {
