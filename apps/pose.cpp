@@ -8,6 +8,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/progress_bar.h"
 #include "capture/camera.h"
 #include "capture/character.h"
 #include "capture/pose_sequence.h"
@@ -64,17 +65,8 @@ void run_pose(const PoseArgs& a) {
     }
   }
   o.method = a.linear_blend ? capture::SkinningMethod::linear_blend : capture::SkinningMethod::dual_quaternion;
-  const bool tty = ::isatty(STDERR_FILENO);
-  o.progress = [tty](int done, int total) {
-    if (tty) {
-      const int width = 30, filled = width * done / total;
-      std::fprintf(stderr, "\r  posing [%s%s] %d/%d", std::string(filled, '#').c_str(),
-                   std::string(width - filled, '.').c_str(), done, total);
-      if (done == total) std::fprintf(stderr, "\n");
-    } else if (done == total || done % 50 == 0) {
-      spdlog::info("posed {}/{} frames", done, total);
-    }
-  };
+  ProgressBar bar("posing");
+  o.progress = [&bar](int done, int total) { bar.update(done, total); };
   spdlog::info("character '{}': {} vertices{}, {} joints, {} dofs; motion {} frames",
                ch.name, ch.body.mesh.num_vertices(), ch.has_cloth() ? " + cloth" : "",
                ch.skeleton.num_joints(), ch.skeleton.num_dofs(), motion.num_frames());

@@ -27,6 +27,7 @@
 #include "graph/error.h"
 #include "physics/cloth_metrics.h"
 #include "physics/cloth_simulator.h"
+#include "physics/scene.h"
 
 namespace weft::capture {
 
@@ -483,19 +484,16 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
       rep.oob_force_max_rel = m.oob_force_max_rel;
       rep.failed = !(r.status == physics::StepStatus::converged || r.status == physics::StepStatus::max_iterations) ||
                    m.penetration_max > s.max_penetration || !r.x.allFinite();
-      metric_frames.push_back({{"frame", f},
-                               {"status", rep.status},
-                               {"failed", rep.failed},
-                               {"newton_iterations", r.newton_iterations},
-                               {"gradient_norm", r.gradient_norm},
-                               {"energy", r.energy},
-                               {"min_signed_distance", finite_or_null(m.min_signed_distance)},
-                               {"penetration_mean", m.penetration_mean},
-                               {"penetration_max", m.penetration_max},
-                               {"oob_force_mean", m.oob_force_mean},
-                               {"oob_force_max", m.oob_force_max},
-                               {"oob_force_mean_rel", m.oob_force_mean_rel},
-                               {"oob_force_max_rel", m.oob_force_max_rel}});
+      physics::FrameRecord rec;
+      rec.frame = f;
+      rec.status = r.status;
+      rec.newton_iterations = r.newton_iterations;
+      rec.gradient_norm = r.gradient_norm;
+      rec.energy = r.energy;
+      rec.metrics = m;
+      nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
+      entry["failed"] = rep.failed;
+      metric_frames.push_back(entry);
       cloth[f] = to_vertices(r.x, mpu);
       x2 = std::move(x1);
       x1 = std::move(r.x);

@@ -292,6 +292,24 @@ nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 }  // namespace
 
+nlohmann::json frame_record_json(const FrameRecord& rec, bool with_timing) {
+  const FrameMetrics& m = rec.metrics;
+  nlohmann::json j = {{"frame", rec.frame},
+                      {"status", to_string(rec.status)},
+                      {"newton_iterations", rec.newton_iterations},
+                      {"gradient_norm", rec.gradient_norm},
+                      {"energy", rec.energy},
+                      {"min_signed_distance", finite_or_null(m.min_signed_distance)},
+                      {"penetration_mean", m.penetration_mean},
+                      {"penetration_max", m.penetration_max},
+                      {"oob_force_mean", m.oob_force_mean},
+                      {"oob_force_max", m.oob_force_max},
+                      {"oob_force_mean_rel", m.oob_force_mean_rel},
+                      {"oob_force_max_rel", m.oob_force_max_rel}};
+  if (with_timing) j["step_ms"] = rec.step_ms;
+  return j;
+}
+
 SceneRun run_scene(const Scene& scene, const std::string& out_dir,
                    const std::function<void(const FrameRecord&)>& progress) {
   ClothSimulator sim(scene.cloth, scene.settings);
@@ -362,19 +380,7 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
   double oob_mean_rel = 0, oob_max_rel = 0;
   for (const auto& rec : run.frames) {
     const FrameMetrics& m = rec.metrics;
-    frames.push_back({{"frame", rec.frame},
-                      {"status", to_string(rec.status)},
-                      {"newton_iterations", rec.newton_iterations},
-                      {"gradient_norm", rec.gradient_norm},
-                      {"energy", rec.energy},
-                      {"min_signed_distance", finite_or_null(m.min_signed_distance)},
-                      {"penetration_mean", m.penetration_mean},
-                      {"penetration_max", m.penetration_max},
-                      {"oob_force_mean", m.oob_force_mean},
-                      {"oob_force_max", m.oob_force_max},
-                      {"oob_force_mean_rel", m.oob_force_mean_rel},
-                      {"oob_force_max_rel", m.oob_force_max_rel},
-                      {"step_ms", rec.step_ms}});
+    frames.push_back(frame_record_json(rec));
     ms.push_back(rec.step_ms);
     converged += rec.status == StepStatus::converged;
     iterations += rec.newton_iterations;

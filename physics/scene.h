@@ -4,6 +4,7 @@
 // wrong types, missing files and non-physical values are errors naming the key and the
 // file), and run frame by frame with per-frame metrics.
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,11 @@ struct FrameRecord {
   double gradient_norm = 0, energy = 0, step_ms = 0;
   FrameMetrics metrics;
 };
+
+// One frame's entry of metrics.json (`frame`, `status`, `newton_iterations`, …; keys in
+// docs/SIMULATION.md). Without timing, `step_ms` is left out: the entry is then the same in
+// every run.
+nlohmann::json frame_record_json(const FrameRecord& record, bool with_timing = true);
 
 struct SceneRun {
   std::vector<FrameRecord> frames;
