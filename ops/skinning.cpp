@@ -85,6 +85,48 @@ DqsBlend<T> dqs_blend(const T* dq_frame, const int64_t* idx, const T* w, int64_t
   return r;
 }
 
+// The forward (frame, vertex) loop of both skinnings: out[b, v] = skin(b, v, x).
+template <class T, class Skin>
+Tensor skin_vertices(const Tensor& vertices, const Sizes& s, Skin skin) {
+  Tensor out = Tensor::empty({s.B, s.V, 3}, vertices.dtype());
+  const T* verts = vertices.data<T>();
+  T* po = out.data<T>();
+#pragma omp parallel for collapse(2) schedule(static)
+  for (int64_t b = 0; b < s.B; ++b)
+    for (int64_t v = 0; v < s.V; ++v) {
+      const Vec3<T> x = Eigen::Map<const Vec3<T>>(verts + 3 * (s.shared_vertices ? v : b * s.V + v));
+      Eigen::Map<Vec3<T>>(po + 3 * (b * s.V + v)) = skin(b, v, x);
+    }
+  return out;
+}
+
+// The backward shell of both skinnings: gradient buffers, the loop over frames (in
+// parallel: a frame's joint gradients belong to one thread) and vertices, and the sums over
+// frames of shared inputs. vertex(b, v, x, g, grad_joints_of_frame_b, grad_weights_of_v)
+// adds the vertex's joint gradients, writes its m weight gradients and returns dL/dx.
+template <class T, class VertexGrad>
+std::vector<Tensor> skin_backward(const BackwardContext& c, const Sizes& s, VertexGrad vertex) {
+  const DType dt = c.in(0).dtype();
+  Tensor gv = Tensor::zeros({s.B, s.V, 3}, dt), gj = Tensor::zeros(c.in(1).shape(), dt),
+         gw = Tensor::zeros({s.B, s.V, s.m}, dt);
+  const int64_t per_joint = c.in(1).numel() / std::max<int64_t>(1, s.B * s.J);
+  const T* verts = c.in(0).data<T>();
+  const T* go = c.grad_output.data<T>();
+  T* pv = gv.data<T>();
+  T* pj = gj.data<T>();
+  T* pw = gw.data<T>();
+#pragma omp parallel for schedule(static)
+  for (int64_t b = 0; b < s.B; ++b)
+    for (int64_t v = 0; v < s.V; ++v) {
+      const Vec3<T> x = Eigen::Map<const Vec3<T>>(verts + 3 * (s.shared_vertices ? v : b * s.V + v));
+      const Vec3<T> g = Eigen::Map<const Vec3<T>>(go + 3 * (b * s.V + v));
+      Eigen::Map<Vec3<T>>(pv + 3 * (b * s.V + v)) =
+          vertex(b, v, x, g, pj + per_joint * b * s.J, pw + (b * s.V + v) * s.m);
+    }
+  return {c.needs_grad[0] ? reduce_frames(gv, s.shared_vertices) : Tensor(), c.needs_grad[1] ? gj : Tensor(),
+          Tensor(), c.needs_grad[3] ? ops::sum(gw, {0}) : Tensor()};
+}
+
 }  // namespace
 
 WEFT_REGISTER_OP(linear_blend_skinning) {
@@ -94,65 +136,40 @@ WEFT_REGISTER_OP(linear_blend_skinning) {
   d.num_inputs = 4;
   d.forward = [](const ForwardContext& c) {
     const Sizes s = check_skinning(kLbs, c.inputs, {3, 4});
-    Tensor out = Tensor::empty({s.B, s.V, 3}, c.in(0).dtype());
-    dispatch_float(out.dtype(), kLbs, [&]<class T>() {
-      const T* verts = c.in(0).data<T>();
+    return dispatch_float(c.in(0).dtype(), kLbs, [&]<class T>() {
       const T* tf = c.in(1).data<T>();
       const int64_t* idx = c.in(2).data<int64_t>();
       const T* w = c.in(3).data<T>();
-      T* po = out.data<T>();
-#pragma omp parallel for collapse(2) schedule(static)
-      for (int64_t b = 0; b < s.B; ++b)
-        for (int64_t v = 0; v < s.V; ++v) {
-          const Vec3<T> x =
-              Eigen::Map<const Vec3<T>>(verts + 3 * (s.shared_vertices ? v : b * s.V + v));
-          Mat34<T> blend = Mat34<T>::Zero();
-          for (int64_t j = 0; j < s.m; ++j)
-            blend += w[v * s.m + j] *
-                     Eigen::Map<const Mat34<T>>(tf + 12 * (b * s.J + idx[v * s.m + j]));
-          Eigen::Map<Vec3<T>>(po + 3 * (b * s.V + v)) =
-              blend.template leftCols<3>() * x + blend.col(3);
-        }
+      return skin_vertices<T>(c.in(0), s, [&](int64_t b, int64_t v, const Vec3<T>& x) -> Vec3<T> {
+        Mat34<T> blend = Mat34<T>::Zero();
+        for (int64_t j = 0; j < s.m; ++j)
+          blend += w[v * s.m + j] * Eigen::Map<const Mat34<T>>(tf + 12 * (b * s.J + idx[v * s.m + j]));
+        return blend.template leftCols<3>() * x + blend.col(3);
+      });
     });
-    return out;
   };
   d.backward = [](const BackwardContext& c) -> std::vector<Tensor> {
     const Sizes s = check_skinning(kLbs, c.inputs, {3, 4});
-    const DType dt = c.in(0).dtype();
-    Tensor gv = Tensor::zeros({s.B, s.V, 3}, dt), gt = Tensor::zeros(c.in(1).shape(), dt),
-           gw = Tensor::zeros({s.B, s.V, s.m}, dt);
-    dispatch_float(dt, kLbs, [&]<class T>() {
-      const T* verts = c.in(0).data<T>();
+    return dispatch_float(c.in(0).dtype(), kLbs, [&]<class T>() {
       const T* tf = c.in(1).data<T>();
       const int64_t* idx = c.in(2).data<int64_t>();
       const T* w = c.in(3).data<T>();
-      const T* go = c.grad_output.data<T>();
-      T* pv = gv.data<T>();
-      T* pt = gt.data<T>();
-      T* pw = gw.data<T>();
-#pragma omp parallel for schedule(static)
-      for (int64_t b = 0; b < s.B; ++b)
-        for (int64_t v = 0; v < s.V; ++v) {
-          const Vec3<T> x =
-              Eigen::Map<const Vec3<T>>(verts + 3 * (s.shared_vertices ? v : b * s.V + v));
-          const Vec3<T> g = Eigen::Map<const Vec3<T>>(go + 3 * (b * s.V + v));
-          Vec3<T> gx = Vec3<T>::Zero();
-          for (int64_t j = 0; j < s.m; ++j) {
-            const int64_t k = idx[v * s.m + j];
-            const T wj = w[v * s.m + j];
-            const Eigen::Map<const Mat34<T>> A(tf + 12 * (b * s.J + k));
-            gx += wj * (A.template leftCols<3>().transpose() * g);
-            Eigen::Map<Mat34<T>> gA(pt + 12 * (b * s.J + k));
-            gA.template leftCols<3>() += (wj * g) * x.transpose();
-            gA.col(3) += wj * g;
-            pw[(b * s.V + v) * s.m + j] = g.dot(A.template leftCols<3>() * x + A.col(3));
-          }
-          Eigen::Map<Vec3<T>>(pv + 3 * (b * s.V + v)) = gx;
+      return skin_backward<T>(c, s, [&](int64_t b, int64_t v, const Vec3<T>& x, const Vec3<T>& g, T* gt,
+                                        T* gw) -> Vec3<T> {
+        Vec3<T> gx = Vec3<T>::Zero();
+        for (int64_t j = 0; j < s.m; ++j) {
+          const int64_t k = idx[v * s.m + j];
+          const T wj = w[v * s.m + j];
+          const Eigen::Map<const Mat34<T>> A(tf + 12 * (b * s.J + k));
+          gx += wj * (A.template leftCols<3>().transpose() * g);
+          Eigen::Map<Mat34<T>> gA(gt + 12 * k);
+          gA.template leftCols<3>() += (wj * g) * x.transpose();
+          gA.col(3) += wj * g;
+          gw[j] = g.dot(A.template leftCols<3>() * x + A.col(3));
         }
+        return gx;
+      });
     });
-    return {c.needs_grad[0] ? reduce_frames(gv, s.shared_vertices) : Tensor(),
-            c.needs_grad[1] ? gt : Tensor(), Tensor(),
-            c.needs_grad[3] ? ops::sum(gw, {0}) : Tensor()};
   };
   return d;
 }
@@ -164,85 +181,58 @@ WEFT_REGISTER_OP(dual_quaternion_skinning) {
   d.num_inputs = 4;
   d.forward = [](const ForwardContext& c) {
     const Sizes s = check_skinning(kDqs, c.inputs, {8});
-    Tensor out = Tensor::empty({s.B, s.V, 3}, c.in(0).dtype());
-    dispatch_float(out.dtype(), kDqs, [&]<class T>() {
-      const T* verts = c.in(0).data<T>();
+    return dispatch_float(c.in(0).dtype(), kDqs, [&]<class T>() {
       const T* dq = c.in(1).data<T>();
       const int64_t* idx = c.in(2).data<int64_t>();
       const T* w = c.in(3).data<T>();
-      T* po = out.data<T>();
-#pragma omp parallel for collapse(2) schedule(static)
-      for (int64_t b = 0; b < s.B; ++b)
-        for (int64_t v = 0; v < s.V; ++v) {
-          T signs[kMaxInfluences];
-          const int64_t m = s.m;
-          const DqsBlend<T> q = dqs_blend(dq + 8 * b * s.J, idx + v * s.m, w + v * s.m, m, signs);
-          const Vec3<T> x =
-              Eigen::Map<const Vec3<T>>(verts + 3 * (s.shared_vertices ? v : b * s.V + v));
-          const T qw = q.c0[0], ew = q.ce[0];
-          const Vec3<T> u = q.c0.template tail<3>(), ev = q.ce.template tail<3>();
-          const Vec3<T> k = u.cross(x) + qw * x;
-          const Vec3<T> rotated = x + 2 * u.cross(k);
-          const Vec3<T> translation = 2 * (qw * ev - ew * u + u.cross(ev));
-          Eigen::Map<Vec3<T>>(po + 3 * (b * s.V + v)) = rotated + translation;
-        }
+      return skin_vertices<T>(c.in(0), s, [&](int64_t b, int64_t v, const Vec3<T>& x) -> Vec3<T> {
+        T signs[kMaxInfluences];
+        const DqsBlend<T> q = dqs_blend(dq + 8 * b * s.J, idx + v * s.m, w + v * s.m, s.m, signs);
+        const T qw = q.c0[0], ew = q.ce[0];
+        const Vec3<T> u = q.c0.template tail<3>(), ev = q.ce.template tail<3>();
+        const Vec3<T> k = u.cross(x) + qw * x;
+        const Vec3<T> rotated = x + 2 * u.cross(k);
+        const Vec3<T> translation = 2 * (qw * ev - ew * u + u.cross(ev));
+        return rotated + translation;
+      });
     });
-    return out;
   };
   d.backward = [](const BackwardContext& c) -> std::vector<Tensor> {
     const Sizes s = check_skinning(kDqs, c.inputs, {8});
-    const DType dt = c.in(0).dtype();
-    Tensor gv = Tensor::zeros({s.B, s.V, 3}, dt), gq = Tensor::zeros(c.in(1).shape(), dt),
-           gw = Tensor::zeros({s.B, s.V, s.m}, dt);
-    dispatch_float(dt, kDqs, [&]<class T>() {
-      const T* verts = c.in(0).data<T>();
+    return dispatch_float(c.in(0).dtype(), kDqs, [&]<class T>() {
       const T* dq = c.in(1).data<T>();
       const int64_t* idx = c.in(2).data<int64_t>();
       const T* w = c.in(3).data<T>();
-      const T* go = c.grad_output.data<T>();
-      T* pv = gv.data<T>();
-      T* pq = gq.data<T>();
-      T* pw = gw.data<T>();
-#pragma omp parallel for schedule(static)
-      for (int64_t b = 0; b < s.B; ++b)
-        for (int64_t v = 0; v < s.V; ++v) {
-          T signs[kMaxInfluences];
-          const int64_t m = s.m;
-          const T* dq_frame = dq + 8 * b * s.J;
-          const DqsBlend<T> q = dqs_blend(dq_frame, idx + v * s.m, w + v * s.m, m, signs);
-          const Vec3<T> x =
-              Eigen::Map<const Vec3<T>>(verts + 3 * (s.shared_vertices ? v : b * s.V + v));
-          const Vec3<T> g = Eigen::Map<const Vec3<T>>(go + 3 * (b * s.V + v));
-          const T qw = q.c0[0], ew = q.ce[0];
-          const Vec3<T> u = q.c0.template tail<3>(), ev = q.ce.template tail<3>();
-          const Vec3<T> k = u.cross(x) + qw * x;
-          // d/dx: Rᵀ g, the rotation by the conjugate quaternion.
-          const Vec3<T> kc = (-u).cross(g) + qw * g;
-          Eigen::Map<Vec3<T>>(pv + 3 * (b * s.V + v)) = g + 2 * (-u).cross(kc);
-          // d/d(c0, ce) of rotated + translation.
-          Vec4<T> g0, ge;
-          g0[0] = 2 * g.dot(u.cross(x)) + 2 * g.dot(ev);
-          g0.template tail<3>() =
-              2 * k.cross(g) + 2 * x.cross(g.cross(u)) + 2 * (-ew * g + ev.cross(g));
-          ge[0] = -2 * g.dot(u);
-          ge.template tail<3>() = 2 * (qw * g + g.cross(u));
-          // Through the normalisation c0 = b0/‖b0‖, ce = be/‖b0‖.
-          const Vec4<T> gb_e = ge / q.norm;
-          const Vec4<T> gb_0 = (g0 - q.c0 * q.c0.dot(g0) - q.c0 * ge.dot(q.ce)) / q.norm;
-          for (int64_t j = 0; j < m; ++j) {
-            const int64_t jt = idx[v * s.m + j];
-            const T sw = signs[j] * w[v * s.m + j];
-            Eigen::Map<Vec4<T>>(pq + 8 * (b * s.J + jt)) += sw * gb_0;
-            Eigen::Map<Vec4<T>>(pq + 8 * (b * s.J + jt) + 4) += sw * gb_e;
-            pw[(b * s.V + v) * s.m + j] =
-                signs[j] * (gb_0.dot(Eigen::Map<const Vec4<T>>(dq_frame + 8 * jt)) +
-                            gb_e.dot(Eigen::Map<const Vec4<T>>(dq_frame + 8 * jt + 4)));
-          }
+      return skin_backward<T>(c, s, [&](int64_t b, int64_t v, const Vec3<T>& x, const Vec3<T>& g, T* gq,
+                                        T* gw) -> Vec3<T> {
+        T signs[kMaxInfluences];
+        const T* dq_frame = dq + 8 * b * s.J;
+        const DqsBlend<T> q = dqs_blend(dq_frame, idx + v * s.m, w + v * s.m, s.m, signs);
+        const T qw = q.c0[0], ew = q.ce[0];
+        const Vec3<T> u = q.c0.template tail<3>(), ev = q.ce.template tail<3>();
+        const Vec3<T> k = u.cross(x) + qw * x;
+        // d/d(c0, ce) of rotated + translation.
+        Vec4<T> g0, ge;
+        g0[0] = 2 * g.dot(u.cross(x)) + 2 * g.dot(ev);
+        g0.template tail<3>() = 2 * k.cross(g) + 2 * x.cross(g.cross(u)) + 2 * (-ew * g + ev.cross(g));
+        ge[0] = -2 * g.dot(u);
+        ge.template tail<3>() = 2 * (qw * g + g.cross(u));
+        // Through the normalisation c0 = b0/‖b0‖, ce = be/‖b0‖.
+        const Vec4<T> gb_e = ge / q.norm;
+        const Vec4<T> gb_0 = (g0 - q.c0 * q.c0.dot(g0) - q.c0 * ge.dot(q.ce)) / q.norm;
+        for (int64_t j = 0; j < s.m; ++j) {
+          const int64_t jt = idx[v * s.m + j];
+          const T sw = signs[j] * w[v * s.m + j];
+          Eigen::Map<Vec4<T>>(gq + 8 * jt) += sw * gb_0;
+          Eigen::Map<Vec4<T>>(gq + 8 * jt + 4) += sw * gb_e;
+          gw[j] = signs[j] * (gb_0.dot(Eigen::Map<const Vec4<T>>(dq_frame + 8 * jt)) +
+                              gb_e.dot(Eigen::Map<const Vec4<T>>(dq_frame + 8 * jt + 4)));
         }
+        // d/dx: Rᵀ g, the rotation by the conjugate quaternion.
+        const Vec3<T> kc = (-u).cross(g) + qw * g;
+        return g + 2 * (-u).cross(kc);
+      });
     });
-    return {c.needs_grad[0] ? reduce_frames(gv, s.shared_vertices) : Tensor(),
-            c.needs_grad[1] ? gq : Tensor(), Tensor(),
-            c.needs_grad[3] ? ops::sum(gw, {0}) : Tensor()};
   };
   return d;
 }
