@@ -19,7 +19,24 @@ void check_nchw(const char* op, const Tensor& x) {
 
 struct PoolGeometry {
   int64_t planes, H, W, k, s, p, Ho, Wo;
+  // Window of output (i, j), clipped to the input: rows [h0, h1), columns [w0, w1).
+  int64_t h0(int64_t i) const { return std::max<int64_t>(i * s - p, 0); }
+  int64_t h1(int64_t i) const { return std::min(i * s - p + k, H); }
+  int64_t w0(int64_t j) const { return std::max<int64_t>(j * s - p, 0); }
+  int64_t w1(int64_t j) const { return std::min(j * s - p + k, W); }
 };
+
+// fn(plane, output offset, h0, h1, w0, w1) for every output window of a geometry (pooling
+// windows or adaptive bins), planes in parallel when there is enough work.
+template <class Geometry, class Fn>
+void for_each_window(const Geometry& g, int64_t parallel_above, Fn fn) {
+#pragma omp parallel for num_threads(num_threads()) if (g.planes * g.H * g.W > parallel_above)
+  for (int64_t pl = 0; pl < g.planes; ++pl)
+    for (int64_t i = 0; i < g.Ho; ++i) {
+      const int64_t h0 = g.h0(i), h1 = g.h1(i);
+      for (int64_t j = 0; j < g.Wo; ++j) fn(pl, (pl * g.Ho + i) * g.Wo + j, h0, h1, g.w0(j), g.w1(j));
+    }
+}
 
 // Square window `kernel`, `stride`, `padding`, as PyTorch checks them: padding at most
 // half the kernel (so every window holds at least one real pixel).
@@ -56,31 +73,21 @@ Tensor max_pool_forward(const Tensor& x, const PoolGeometry& g, Tensor& argmax) 
   const T* px = x.data<T>();
   T* py = y.data<T>();
   int64_t* pa = argmax.data<int64_t>();
-#pragma omp parallel for num_threads(num_threads()) if (g.planes * g.Ho * g.Wo > 4096)
-  for (int64_t pl = 0; pl < g.planes; ++pl) {
+  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
     const T* xp = px + pl * g.H * g.W;
-    for (int64_t i = 0; i < g.Ho; ++i) {
-      const int64_t h0 = std::max<int64_t>(i * g.s - g.p, 0);
-      const int64_t h1 = std::min(i * g.s - g.p + g.k, g.H);
-      for (int64_t j = 0; j < g.Wo; ++j) {
-        const int64_t w0 = std::max<int64_t>(j * g.s - g.p, 0);
-        const int64_t w1 = std::min(j * g.s - g.p + g.k, g.W);
-        T best = -std::numeric_limits<T>::infinity();
-        int64_t at = h0 * g.W + w0;
-        for (int64_t h = h0; h < h1; ++h)
-          for (int64_t w = w0; w < w1; ++w) {
-            const T v = xp[h * g.W + w];
-            if (v > best || std::isnan(v)) {  // NaN propagates, like PyTorch
-              best = v;
-              at = h * g.W + w;
-            }
-          }
-        const int64_t o = (pl * g.Ho + i) * g.Wo + j;
-        py[o] = best;
-        pa[o] = at;
+    T best = -std::numeric_limits<T>::infinity();
+    int64_t at = h0 * g.W + w0;
+    for (int64_t h = h0; h < h1; ++h)
+      for (int64_t w = w0; w < w1; ++w) {
+        const T v = xp[h * g.W + w];
+        if (v > best || std::isnan(v)) {  // NaN propagates, like PyTorch
+          best = v;
+          at = h * g.W + w;
+        }
       }
-    }
-  }
+    py[o] = best;
+    pa[o] = at;
+  });
   return y;
 }
 
@@ -106,22 +113,13 @@ Tensor avg_pool_forward(const Tensor& x, const PoolGeometry& g) {
   const T* px = x.data<T>();
   T* py = y.data<T>();
   const T inv = T(1) / T(g.k * g.k);
-#pragma omp parallel for num_threads(num_threads()) if (g.planes * g.Ho * g.Wo > 4096)
-  for (int64_t pl = 0; pl < g.planes; ++pl) {
+  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
     const T* xp = px + pl * g.H * g.W;
-    for (int64_t i = 0; i < g.Ho; ++i) {
-      const int64_t h0 = std::max<int64_t>(i * g.s - g.p, 0);
-      const int64_t h1 = std::min(i * g.s - g.p + g.k, g.H);
-      for (int64_t j = 0; j < g.Wo; ++j) {
-        const int64_t w0 = std::max<int64_t>(j * g.s - g.p, 0);
-        const int64_t w1 = std::min(j * g.s - g.p + g.k, g.W);
-        T acc = 0;
-        for (int64_t h = h0; h < h1; ++h)
-          for (int64_t w = w0; w < w1; ++w) acc += xp[h * g.W + w];
-        py[(pl * g.Ho + i) * g.Wo + j] = acc * inv;
-      }
-    }
-  }
+    T acc = 0;
+    for (int64_t h = h0; h < h1; ++h)
+      for (int64_t w = w0; w < w1; ++w) acc += xp[h * g.W + w];
+    py[o] = acc * inv;
+  });
   return y;
 }
 
@@ -131,21 +129,12 @@ Tensor avg_pool_backward(const Tensor& x, const PoolGeometry& g, const Tensor& g
   const T* pg = gy.data<T>();
   T* px = gx.data<T>();
   const T inv = T(1) / T(g.k * g.k);
-#pragma omp parallel for num_threads(num_threads()) if (g.planes * g.Ho * g.Wo > 4096)
-  for (int64_t pl = 0; pl < g.planes; ++pl) {
+  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
     T* xp = px + pl * g.H * g.W;
-    for (int64_t i = 0; i < g.Ho; ++i) {
-      const int64_t h0 = std::max<int64_t>(i * g.s - g.p, 0);
-      const int64_t h1 = std::min(i * g.s - g.p + g.k, g.H);
-      for (int64_t j = 0; j < g.Wo; ++j) {
-        const int64_t w0 = std::max<int64_t>(j * g.s - g.p, 0);
-        const int64_t w1 = std::min(j * g.s - g.p + g.k, g.W);
-        const T v = pg[(pl * g.Ho + i) * g.Wo + j] * inv;
-        for (int64_t h = h0; h < h1; ++h)
-          for (int64_t w = w0; w < w1; ++w) xp[h * g.W + w] += v;
-      }
-    }
-  }
+    const T v = pg[o] * inv;
+    for (int64_t h = h0; h < h1; ++h)
+      for (int64_t w = w0; w < w1; ++w) xp[h * g.W + w] += v;
+  });
   return gx;
 }
 
@@ -174,18 +163,13 @@ Tensor adaptive_forward(const Tensor& x, const AdaptiveGeometry& g) {
   Tensor y = Tensor::empty({x.size(0), x.size(1), g.Ho, g.Wo}, x.dtype());
   const T* px = x.data<T>();
   T* py = y.data<T>();
-#pragma omp parallel for num_threads(num_threads()) if (g.planes * g.H * g.W > 16384)
-  for (int64_t pl = 0; pl < g.planes; ++pl) {
+  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
     const T* xp = px + pl * g.H * g.W;
-    for (int64_t i = 0; i < g.Ho; ++i)
-      for (int64_t j = 0; j < g.Wo; ++j) {
-        T acc = 0;
-        for (int64_t h = g.h0(i); h < g.h1(i); ++h)
-          for (int64_t w = g.w0(j); w < g.w1(j); ++w) acc += xp[h * g.W + w];
-        const int64_t count = (g.h1(i) - g.h0(i)) * (g.w1(j) - g.w0(j));
-        py[(pl * g.Ho + i) * g.Wo + j] = acc / T(count);
-      }
-  }
+    T acc = 0;
+    for (int64_t h = h0; h < h1; ++h)
+      for (int64_t w = w0; w < w1; ++w) acc += xp[h * g.W + w];
+    py[o] = acc / T((h1 - h0) * (w1 - w0));
+  });
   return y;
 }
 
@@ -194,17 +178,12 @@ Tensor adaptive_backward(const Tensor& x, const AdaptiveGeometry& g, const Tenso
   Tensor gx = Tensor::zeros(x.shape(), x.dtype());
   const T* pg = gy.data<T>();
   T* px = gx.data<T>();
-#pragma omp parallel for num_threads(num_threads()) if (g.planes * g.H * g.W > 16384)
-  for (int64_t pl = 0; pl < g.planes; ++pl) {
+  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
     T* xp = px + pl * g.H * g.W;
-    for (int64_t i = 0; i < g.Ho; ++i)
-      for (int64_t j = 0; j < g.Wo; ++j) {
-        const int64_t count = (g.h1(i) - g.h0(i)) * (g.w1(j) - g.w0(j));
-        const T v = pg[(pl * g.Ho + i) * g.Wo + j] / T(count);
-        for (int64_t h = g.h0(i); h < g.h1(i); ++h)
-          for (int64_t w = g.w0(j); w < g.w1(j); ++w) xp[h * g.W + w] += v;
-      }
-  }
+    const T v = pg[o] / T((h1 - h0) * (w1 - w0));
+    for (int64_t h = h0; h < h1; ++h)
+      for (int64_t w = w0; w < w1; ++w) xp[h * g.W + w] += v;
+  });
   return gx;
 }
 
