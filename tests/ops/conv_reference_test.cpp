@@ -5,19 +5,12 @@
 
 #include "graph/error.h"
 #include "ops/ops.h"
+#include "tests/ops/test_util.h"
 
 namespace weft {
 namespace {
 
-double rel_l2(const std::vector<double>& got, const std::vector<double>& want) {
-  EXPECT_EQ(got.size(), want.size());
-  double num = 0, den = 0;
-  for (size_t i = 0; i < want.size() && i < got.size(); ++i) {
-    num += (got[i] - want[i]) * (got[i] - want[i]);
-    den += want[i] * want[i];
-  }
-  return std::sqrt(num / std::max(den, 1e-300));
-}
+using testing::rel_l2;
 
 struct ConvCase {
   int64_t N, C, H, W, O, kh, kw;

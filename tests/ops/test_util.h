@@ -2,6 +2,8 @@
 // Helpers shared by the op unit tests: value comparison and error-message checks.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -19,6 +21,17 @@ inline void expect_values(const Tensor& t, const std::vector<double>& expected, 
   ASSERT_EQ(v.size(), expected.size()) << "shape " << shape_str(t.shape());
   for (size_t i = 0; i < v.size(); ++i)
     EXPECT_NEAR(v[i], expected[i], atol * (1 + std::abs(expected[i]))) << "element " << i;
+}
+
+// Relative L2 error ‖got − want‖ / ‖want‖ (sizes must match).
+inline double rel_l2(const std::vector<double>& got, const std::vector<double>& want) {
+  EXPECT_EQ(got.size(), want.size());
+  double num = 0, den = 0;
+  for (size_t i = 0; i < want.size() && i < got.size(); ++i) {
+    num += (got[i] - want[i]) * (got[i] - want[i]);
+    den += want[i] * want[i];
+  }
+  return std::sqrt(num / std::max(den, 1e-300));
 }
 
 // Runs fn, expects a weft::Error whose message contains every one of `parts`.
