@@ -68,27 +68,15 @@ std::vector<int> int_list(const std::string& s) {
 // A latitude–longitude sphere of radius 1 m (in mm) with smoothly varying colours:
 // 71 rings × 72 segments, two triangles per cell except at the poles: 10,080 triangles.
 TriangleMesh sphere_mesh() {
-  const int rings = 71, segments = 72;
-  TriangleMesh m;
-  m.V.resize((rings + 1) * (segments + 1), 3);
+  TriangleMesh m = uv_sphere(Eigen::Vector3d::Zero(), 1000, 71, 72);
+  m.uv.resize(0, 2);
+  m.uv_faces.resize(0, 3);
   m.colors.resize(m.V.rows(), 3);
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j <= segments; ++j) {
-      const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
-      const int k = i * (segments + 1) + j;
-      m.V.row(k) << 1000 * std::sin(theta) * std::cos(phi), -1000 * std::cos(theta),
-          1000 * std::sin(theta) * std::sin(phi);
-      m.colors.row(k) << 0.5 + 0.4 * std::cos(phi), 0.5 + 0.4 * std::sin(theta), 0.6;
-    }
-  std::vector<Eigen::RowVector3i> faces;
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const int a = i * (segments + 1) + j, b = a + 1, c = a + segments + 1, d = c + 1;
-      if (i > 0) faces.emplace_back(a, c, b);  // the other one is degenerate at the pole
-      if (i < rings - 1) faces.emplace_back(b, c, d);
-    }
-  m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = faces[f];
+  for (int k = 0; k < m.V.rows(); ++k) {
+    const int i = k / 73, j = k % 73;
+    const double theta = M_PI * i / 71, phi = 2 * M_PI * j / 72;
+    m.colors.row(k) << 0.5 + 0.4 * std::cos(phi), 0.5 + 0.4 * std::sin(theta), 0.6;
+  }
   return m;
 }
 

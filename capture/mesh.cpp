@@ -87,4 +87,31 @@ std::vector<std::vector<int>> vertex_adjacency(const Faces& F, int num_vertices)
   return adj;
 }
 
+TriangleMesh uv_sphere(const Eigen::Vector3d& centre, double radius, int rings, int segments) {
+  if (rings < 2 || segments < 3) fail("uv_sphere: need at least 2 rings and 3 segments, got ", rings, " and ", segments);
+  TriangleMesh m;
+  m.V.resize((rings + 1) * (segments + 1), 3);
+  m.uv.resize(m.V.rows(), 2);
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j <= segments; ++j) {
+      const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
+      const int k = i * (segments + 1) + j;
+      m.V.row(k) = centre.transpose() + radius * Eigen::RowVector3d(std::sin(theta) * std::cos(phi),
+                                                                    -std::cos(theta),
+                                                                    std::sin(theta) * std::sin(phi));
+      m.uv.row(k) << static_cast<double>(j) / segments, static_cast<double>(i) / rings;
+    }
+  std::vector<Eigen::RowVector3i> faces;
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const int a = i * (segments + 1) + j, b = a + 1, c = a + segments + 1, d = c + 1;
+      if (i > 0) faces.emplace_back(a, c, b);  // the other one is degenerate at the pole
+      if (i < rings - 1) faces.emplace_back(b, c, d);
+    }
+  m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = faces[f];
+  m.uv_faces = m.F;
+  return m;
+}
+
 }  // namespace weft::capture

@@ -32,6 +32,12 @@ struct TriangleMesh {
 // or the optional arrays have inconsistent sizes.
 void validate_mesh(const TriangleMesh& mesh, const std::string& what);
 
+// A latitude–longitude sphere around `centre`: (rings + 1) × (segments + 1) vertices (the
+// seam and the poles repeated, so uv is per vertex: u = j / segments around from +x
+// towards +z, v = i / rings from the south pole, −y, up), two triangles per cell except at
+// the poles, outward-facing; uv_faces = F.
+TriangleMesh uv_sphere(const Eigen::Vector3d& centre, double radius, int rings, int segments);
+
 // Unit face normals (M×3); degenerate faces get a zero normal.
 Vertices face_normals(const Vertices& V, const Faces& F);
 // Area-weighted unit vertex normals (N×3).

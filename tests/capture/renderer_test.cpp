@@ -21,31 +21,8 @@ using weft::capture::testing::opencv_silhouette;
 
 namespace {
 
-// A latitude–longitude sphere; uv per vertex (u around, v from the south pole up).
 TriangleMesh sphere(double radius, const Eigen::Vector3d& c, int rings, int segments) {
-  TriangleMesh m;
-  m.V.resize((rings + 1) * (segments + 1), 3);
-  m.uv.resize(m.V.rows(), 2);
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j <= segments; ++j) {
-      const double theta = M_PI * i / rings, phi = 2 * M_PI * j / segments;
-      const int k = i * (segments + 1) + j;
-      m.V.row(k) = c.transpose() + radius * Eigen::RowVector3d(std::sin(theta) * std::cos(phi),
-                                                               -std::cos(theta),
-                                                               std::sin(theta) * std::sin(phi));
-      m.uv.row(k) << double(j) / segments, double(i) / rings;
-    }
-  std::vector<Eigen::RowVector3i> faces;
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const int a = i * (segments + 1) + j, b = a + 1, c2 = a + segments + 1, d = c2 + 1;
-      if (i > 0) faces.emplace_back(a, c2, b);  // the other one is degenerate at the pole
-      if (i < rings - 1) faces.emplace_back(b, c2, d);
-    }
-  m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = faces[f];
-  m.uv_faces = m.F;
-  return m;
+  return uv_sphere(c, radius, rings, segments);
 }
 
 // An axis-aligned box with half extents h around c.
