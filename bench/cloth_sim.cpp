@@ -5,6 +5,10 @@
 //   skirt: a tube (skirt-like) whose top ring follows a body mesh moving sideways.
 // Usage: bench_cloth_sim [drape|skirt] [direct|reused_factor] N FRAMES
 //                        [automatic|simplicial|supernodal] [TOLERANCE] [project|exact]
+//                        [amd|nested_dissection|metis] [KEY=VALUE ...]
+// KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
+// cg_relative_tolerance, start_from_prediction (0/1),
+// precondition_exact_hessian (0/1).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
 // exact)
 // Runs single-threaded; prints one line per frame and a median summary.
@@ -84,7 +88,19 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc_all, char** argv_all) {
+  std::vector<char*> positional;
+  std::vector<std::pair<std::string, std::string>> named;
+  for (int k = 0; k < argc_all; ++k) {
+    const char* eq = k > 0 ? std::strchr(argv_all[k], '=') : nullptr;
+    if (eq)
+      named.emplace_back(std::string(argv_all[k], static_cast<size_t>(eq - argv_all[k])),
+                         std::string(eq + 1));
+    else
+      positional.push_back(argv_all[k]);
+  }
+  const int argc = static_cast<int>(positional.size());
+  char** argv = positional.data();
   const std::string scene = argc > 1 ? argv[1] : "drape";
   const std::string solver = argc > 2 ? argv[2] : "reused_factor";
   const int n = argc > 3 ? std::atoi(argv[3]) : 32;
@@ -92,6 +108,7 @@ int main(int argc, char** argv) {
   const std::string cholesky = argc > 5 ? argv[5] : "automatic";
   const double tolerance = argc > 6 ? std::atof(argv[6]) : SimulationSettings{}.newton.tolerance;
   const std::string membrane = argc > 7 ? argv[7] : "default";
+  const std::string ordering = argc > 8 ? argv[8] : "default";
   weft::set_num_threads(1);
   SimulationSettings s;
   s.time_step = 1.0 / 60;
@@ -101,8 +118,23 @@ int main(int argc, char** argv) {
   s.newton.cholesky = cholesky == "simplicial"   ? CholeskyKind::simplicial
                       : cholesky == "supernodal" ? CholeskyKind::supernodal
                                                  : CholeskyKind::automatic;
+  if (ordering != "default")
+    s.newton.ordering = ordering == "metis"                ? CholeskyOrdering::metis
+                        : ordering == "nested_dissection" ? CholeskyOrdering::nested_dissection
+                                                           : CholeskyOrdering::amd;
   if (membrane != "default") s.project_membrane_hessian = membrane == "project";
   s.newton.max_iterations = 50;
+  for (const auto& [key, value] : named) {
+    if (key == "cg_max_iterations") s.newton.cg_max_iterations = std::atoi(value.c_str());
+    else if (key == "cg_relative_tolerance") s.newton.cg_relative_tolerance = std::atof(value.c_str());
+    else if (key == "precondition_exact_hessian")
+      s.newton.precondition_exact_hessian = value != "0";
+    else if (key == "start_from_prediction") s.start_from_prediction = value != "0";
+    else {
+      std::fprintf(stderr, "bench_cloth_sim: unknown option '%s'\n", key.c_str());
+      return 2;
+    }
+  }
   s.newton.linear_solver =
       solver == "direct" ? LinearSolverKind::direct : LinearSolverKind::reused_factor;
   const bool skirt = scene == "skirt";

@@ -10,12 +10,22 @@ namespace weft::physics {
 
 enum class CholeskyKind { automatic, simplicial, supernodal };
 
+// Fill-reducing ordering of the symbolic analysis.
+enum class CholeskyOrdering {
+  amd,                // approximate minimum degree
+  nested_dissection,  // CHOLMOD's nested dissection (METIS separators + constrained AMD)
+  metis,              // METIS's nested dissection
+};
+
 class CholmodSolver {
  public:
-  // The ordering is AMD only: deterministic (METIS's random tie-breaking made batch runs
-  // differ from sequential ones) and as good on these 2D-manifold stencils.
+  // Every CHOLMOD call runs on the calling thread only (CHOLMOD's own OpenMP teams are
+  // switched off for it) and is deterministic: the METIS-based orderings are computed
+  // under a process-wide lock, because METIS's random number state is global, so
+  // simulators built in parallel get the same ordering as one built alone.
   explicit CholmodSolver(const SparseHessian& pattern,
-                         CholeskyKind kind = CholeskyKind::automatic);
+                         CholeskyKind kind = CholeskyKind::automatic,
+                         CholeskyOrdering ordering = CholeskyOrdering::amd);
   ~CholmodSolver();
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;

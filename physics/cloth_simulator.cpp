@@ -85,9 +85,17 @@ NewtonReport ClothSimulator::advance(Positions& x, Positions& v, double h) {
   if (!x_hat.allFinite()) x_hat = x;  // a non-finite velocity carries no information
   inertia_->set_prediction(x_hat);
   for (Energy* e : solver_->energies()) e->begin_step(x);
-  // Newton starts from the last state rather than the prediction x̂: a prediction that
-  // has tunnelled through a thin obstacle would be pushed out on the wrong side.
+  // Newton starts from the prediction x̂ as far as the energies' step filter allows: a
+  // prediction that has tunnelled through a thin obstacle would be pushed out on the
+  // wrong side, so the move from x_n is cut where a vertex would come closer than δ/2 to
+  // an obstacle (Energy::max_step).
   Positions x_new = x_start;
+  if (settings_.start_from_prediction) {
+    const Positions dx = x_hat - x_start;
+    double alpha = 1.0;
+    for (const Energy* e : solver_->energies()) alpha = std::min(alpha, e->max_step(x_start, dx));
+    if (alpha > 0 && std::isfinite(alpha)) x_new += alpha * dx;
+  }
   NewtonReport report = solver_->minimize(x_new);
   if (!x_new.allFinite()) {
     x_new = x_start;

@@ -38,6 +38,9 @@ struct SimulationSettings {
   // unconverged at the cap; exact with fallback, 42 per frame, all converged.
   // Bending and collision Hessians are always projected.
   bool project_membrane_hessian = false;
+  // Newton's first iterate: x_n + α·h·v_n (the inertial prediction, α ≤ 1 cut by the step
+  // filter) instead of x_n.
+  bool start_from_prediction = true;
 };
 // Throws weft::Error naming the field if a value is non-physical.
 void validate(const SimulationSettings& settings);

@@ -22,9 +22,9 @@ class Energy {
   // Vertex pairs this energy couples (off-diagonal blocks of its Hessian).
   virtual void add_pattern(std::vector<std::array<int, 2>>& pairs) const { (void)pairs; }
   // Adds a PSD matrix C such that the energy's exact Hessian plus C is PSD, for energies
-  // whose exact Hessian (projection off) can be indefinite; returns false if it has none.
-  // The Newton solver uses the exact Hessian and adds C only when the sum is not
-  // positive definite.
+  // whose exact Hessian (projection off) can be indefinite; returns false if it added
+  // nothing (no correction, or none needed at x). The Newton solver factorises the
+  // corrected Hessian and uses it to precondition CG on the exact one.
   virtual bool add_hessian_correction(const Eigen::VectorXd& x, SparseHessian& c) const {
     (void)x;
     (void)c;

@@ -37,6 +37,7 @@ bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHess
   if (project_hessian_) return false;
   using Mat32 = Eigen::Matrix<double, 3, 2>;
   const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
+  bool any = false;
   for (const auto& el : elements_) {
     Mat32 F = Mat32::Zero();
     for (int a = 0; a < 3; ++a) F += x.segment<3>(3 * el.v[a]) * el.beta.row(a);
@@ -44,6 +45,7 @@ bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHess
     const Eigen::Matrix2d S = 2.0 * mu_ * G + lambda_ * G.trace() * I;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
     if (eig.eigenvalues()[0] >= 0) continue;  // in tension: the exact Hessian is PSD
+    any = true;
     const Eigen::Matrix2d s_neg = eig.eigenvectors() *
                                   (-eig.eigenvalues().cwiseMin(0.0)).asDiagonal() *
                                   eig.eigenvectors().transpose();
@@ -53,7 +55,7 @@ bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHess
       for (int b = 0; b < 3; ++b) hx.block<3, 3>(3 * a, 3 * b).diagonal().setConstant(w(a, b));
     c.add<3>(el.v, hx);
   }
-  return true;
+  return any;
 }
 
 double MembraneEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,

@@ -33,8 +33,9 @@ NewtonSolver::NewtonSolver(int num_vertices, std::vector<Energy*> energies, Newt
   std::vector<std::array<int, 2>> pairs;
   for (const Energy* e : energies_) e->add_pattern(pairs);
   hessian_ = SparseHessian(n_, pairs);
+  exact_hessian_ = hessian_;
   inv_force_scale_ = Eigen::VectorXd::Ones(n_);
-  cholmod_ = std::make_unique<CholmodSolver>(hessian_, options_.cholesky);
+  cholmod_ = std::make_unique<CholmodSolver>(hessian_, options_.cholesky, options_.ordering);
 }
 
 void NewtonSolver::set_force_scale(Eigen::VectorXd f) {
@@ -75,9 +76,10 @@ const SparseHessian& NewtonSolver::hessian(const Eigen::VectorXd& x) {
   return hessian_;
 }
 
-bool NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
-                                NewtonReport& report) {
-  // Preconditioned CG on (H + δI) d = −g with the (possibly older) Cholesky factor.
+NewtonSolver::CgOutcome NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
+                                                   NewtonReport& report) {
+  // Preconditioned CG on (H + δI) d = −g with the (possibly older) Cholesky factor, to a
+  // residual of cg_relative_tolerance·‖g‖.
   const Eigen::VectorXd b = -g;
   d.setZero(b.size());
   Eigen::VectorXd r = b;
@@ -89,41 +91,95 @@ bool NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
     Eigen::VectorXd hp = hessian_.multiply(p);
     hp += delta_ * p;
     const double php = p.dot(hp);
-    if (!(php > 0)) return false;  // not positive definite along p
+    if (!(php > 0)) return CgOutcome::negative_curvature;
     const double alpha = rz / php;
     d += alpha * p;
     r -= alpha * hp;
     ++report.cg_iterations;
-    if (r.norm() <= target) return true;
+    if (r.norm() <= target) return CgOutcome::converged;
     z = cholmod_->solve(r);
     const double rz_new = r.dot(z);
     p = z + (rz_new / rz) * p;
     rz = rz_new;
   }
-  return false;
+  return CgOutcome::too_slow;
+}
+
+void NewtonSolver::exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
+                                   NewtonReport& report) {
+  // Truncated CG on the exact (H_exact + δI) d = −g, preconditioned by the factor of the
+  // corrected H + δI. Every iterate before a direction of non-positive curvature is a
+  // descent direction; if the very first direction has one, the preconditioned step
+  // (the corrected Newton direction) is used.
+  const Eigen::VectorXd b = -g;
+  Eigen::VectorXd r = b;
+  Eigen::VectorXd z = cholmod_->solve(r);
+  d = z;  // the corrected Newton direction, the fallback
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(b.size());
+  Eigen::VectorXd p = z;
+  double rz = r.dot(z);
+  const double target = options_.cg_relative_tolerance * b.norm();
+  for (int k = 0; k < options_.cg_max_iterations; ++k) {
+    Eigen::VectorXd hp = exact_hessian_.multiply(p);
+    hp += delta_ * p;
+    const double php = p.dot(hp);
+    if (!(php > 0)) break;
+    const double alpha = rz / php;
+    x += alpha * p;
+    r -= alpha * hp;
+    d = x;
+    ++report.cg_iterations;
+    if (r.norm() <= target) break;
+    z = cholmod_->solve(r);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+}
+
+bool NewtonSolver::correct_hessian(const Eigen::VectorXd& x, NewtonReport& report) {
+  if (hessian_corrected_) return false;
+  hessian_corrected_ = true;
+  bool any = false;
+  for (const Energy* e : energies_) any |= e->add_hessian_correction(x, hessian_);
+  if (any) ++report.corrections;
+  return any;
 }
 
 bool NewtonSolver::direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
                              Eigen::VectorXd& d, NewtonReport& report) {
   const auto t0 = std::chrono::steady_clock::now();
   bool ok = false;
-  bool corrected = false;
+  const bool reuse = options_.linear_solver == LinearSolverKind::reused_factor;
   for (int attempt = 0; attempt < 40 && !ok; ++attempt) {
-    const bool reuse = options_.linear_solver == LinearSolverKind::reused_factor;
     if (reuse && !factor_stale_ && cholmod_->has_factor()) {
-      if (cg_direction(g, d, report) && g.dot(d) < 0 && d.allFinite()) {
+      const CgOutcome cg = cg_direction(g, d, report);
+      if (cg == CgOutcome::converged && g.dot(d) < 0 && d.allFinite()) {
         ok = true;
         break;
       }
-      factor_stale_ = true;  // CG too slow or failed: refresh the factor and retry
+      // Negative curvature of the exact Hessian: switch to the PSD-corrected one and keep
+      // the factor; otherwise (CG too slow) refresh the factor.
+      if (cg == CgOutcome::negative_curvature && correct_hessian(x, report)) continue;
+      factor_stale_ = true;
       continue;
+    }
+    if (!reuse && options_.precondition_exact_hessian && !hessian_corrected_) {
+      // Factorise the corrected Hessian, which is positive definite, and reach the exact
+      // one by CG (exact_direction): one factorisation per iteration instead of a failed
+      // one on the indefinite exact Hessian followed by the corrected one.
+      exact_hessian_.values() = hessian_.values();
+      exact_differs_ = correct_hessian(x, report);
     }
     hessian_.add_to_diagonal(delta_);
     const bool factored = cholmod_->factorize(hessian_);
     hessian_.add_to_diagonal(-delta_);
     ++report.factorizations;
     if (factored) {
-      d = -cholmod_->solve(g);
+      if (exact_differs_)
+        exact_direction(g, d, report);
+      else
+        d = -cholmod_->solve(g);
       factor_stale_ = false;
       if (d.allFinite() && g.dot(d) < 0) {
         ok = true;
@@ -132,17 +188,9 @@ bool NewtonSolver::direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
     } else {
       factor_stale_ = true;
     }
-    if (!corrected) {
-      // Not positive definite: first switch the energies with an indefinite exact Hessian
-      // to their PSD projection, and only then regularise with δI.
-      corrected = true;
-      bool any = false;
-      for (const Energy* e : energies_) any |= e->add_hessian_correction(x, hessian_);
-      if (any) {
-        ++report.corrections;
-        continue;
-      }
-    }
+    // Not positive definite: first switch the energies with an indefinite exact Hessian
+    // to their PSD projection, and only then regularise with δI.
+    if (correct_hessian(x, report)) continue;
     delta_ = delta_ == 0 ? delta_floor_ : 10.0 * delta_;
   }
   report.linear_solve_ms += ms_since(t0);
@@ -170,6 +218,8 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
   for (int it = 0; it < options_.max_iterations; ++it) {
     if (residual(g) <= options_.tolerance) return finish(StepStatus::converged);
     evaluate(x, nullptr, &hessian_, &report.energy_ms);
+    hessian_corrected_ = false;
+    exact_differs_ = false;
     if (delta_floor_ == 0) {
       // Regularisation starts from a tiny fraction of the Hessian's scale (N/m).
       double diag = 0;
