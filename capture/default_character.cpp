@@ -2,17 +2,17 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <charconv>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <set>
 #include <sstream>
 
 #include "capture/atomic_file.h"
 #include "capture/automatic_weights.h"
 #include "capture/mesh_io.h"
 #include "capture/skeletool_io.h"
+#include "capture/strict_yaml.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -20,115 +20,77 @@ namespace weft::capture {
 namespace fs = std::filesystem;
 using Eigen::Vector3d;
 
-const char* garment_name(GarmentType type) {
-  switch (type) {
-    case GarmentType::skirt: return "skirt";
-    case GarmentType::dress: return "dress";
-    case GarmentType::none: break;
-  }
-  return "none";
-}
-
 // ------------------------------------------------------------------ config
 
 namespace {
 
-// One YAML mapping whose keys must all be known.
-struct Keys {
-  const YAML::Node& node;
-  const std::string& file;
-  std::string prefix;
-
-  std::string key(const std::string& k) const { return prefix.empty() ? k : prefix + "." + k; }
-  void allow(std::initializer_list<const char*> known) const {
-    if (!node.IsMap()) fail(file, ": '", prefix.empty() ? "(top level)" : prefix, "' must be a mapping");
-    const std::set<std::string> ok(known.begin(), known.end());
-    for (const auto& kv : node) {
-      const std::string k = kv.first.as<std::string>();
-      if (ok.count(k)) continue;
-      std::string list;
-      for (const auto& o : ok) list += (list.empty() ? "" : ", ") + o;
-      fail(file, ": unknown key '", key(k), "' (expected one of: ", list, ")");
-    }
-  }
-  template <class T>
-  void read(const char* k, T& out, const char* expected) const {
-    const YAML::Node n = node[k];
-    if (!n) return;
-    try {
-      if (!n.IsScalar()) fail(file, ": '", key(k), "' must be ", expected);
-      out = n.as<T>();
-    } catch (const YAML::Exception&) {
-      fail(file, ":", n.Mark().line + 1, ": '", key(k), "' must be ", expected);
-    }
-  }
-  void positive(const char* k, double& out) const {
-    read(k, out, "a number");
-    if (!(std::isfinite(out) && out > 0)) fail(file, ": '", key(k), "' must be > 0, got ", out);
-  }
-  void count(const char* k, int& out, int lo, int hi) const {
-    read(k, out, "an integer");
-    if (out < lo || out > hi) fail(file, ": '", key(k), "' must be in ", lo, "..", hi, ", got ", out);
-  }
-};
-
-DefaultCharacterConfig parse_config(const YAML::Node& root, const std::string& file, const fs::path& dir) {
-  DefaultCharacterConfig c;
-  c.file = file;
-  const Keys top{root, file, ""};
-  top.allow({"name", "mesh", "height_m", "body", "garment"});
-  top.read("name", c.name, "a string");
-  top.read("mesh", c.mesh, "a file path");
-  if (c.mesh.empty()) fail(file, ": 'mesh' must not be empty");
-  if (fs::path(c.mesh).is_relative()) c.mesh = (dir / c.mesh).lexically_normal().string();
-  top.positive("height_m", c.height_m);
-  if (root["body"]) {
-    const Keys b{root["body"], file, "body"};
-    b.allow({"graph_nodes", "nodes_per_vertex"});
-    b.count("graph_nodes", c.body_graph_nodes, 1, 100000);
-    b.count("nodes_per_vertex", c.nodes_per_vertex, 1, 16);
-  }
-  if (root["garment"]) {
-    const Keys g{root["garment"], file, "garment"};
-    g.allow({"type", "length", "flare", "clearance", "top_offset", "straps", "segments", "rings",
-             "graph_nodes", "rigidity"});
-    std::string type = garment_name(c.garment);
-    g.read("type", type, "skirt, dress or none");
-    if (type == "skirt") c.garment = GarmentType::skirt;
-    else if (type == "dress") c.garment = GarmentType::dress;
-    else if (type == "none") c.garment = GarmentType::none;
-    else fail(file, ": 'garment.type' must be skirt, dress or none, got '", type, "'");
-    g.positive("length", c.length);
-    g.read("flare", c.flare, "a number");
-    if (!(std::isfinite(c.flare) && c.flare >= 0)) fail(file, ": 'garment.flare' must be ≥ 0, got ", c.flare);
-    g.positive("clearance", c.clearance);
-    g.read("top_offset", c.top_offset, "a number");
-    if (!std::isfinite(c.top_offset)) fail(file, ": 'garment.top_offset' must be finite");
-    g.read("straps", c.straps, "true or false");
-    if (c.straps && c.garment != GarmentType::dress) fail(file, ": 'garment.straps' needs type: dress");
-    g.count("segments", c.segments, 8, 4096);
-    g.count("rings", c.rings, 2, 4096);
-    g.count("graph_nodes", c.cloth_graph_nodes, 1, 100000);
-    g.read("rigidity", c.cloth_rigidity, "a number");
-    if (!(c.cloth_rigidity >= 0 && c.cloth_rigidity <= 1)) fail(file, ": 'garment.rigidity' must be in [0, 1]");
-  }
-  return c;
+int count(const StrictYaml& y, const YAML::Node& n, const std::string& key, int lo, int hi) {
+  const int v = y.get<int>(n, key, "an integer");
+  if (v < lo || v > hi)
+    y.fail_at(n, key, "expected an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", found " +
+                          std::to_string(v));
+  return v;
 }
 
-YAML::Node load_yaml(const std::string& text, const std::string& name) {
-  try {
-    return YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    fail(name, ":", e.mark.line + 1, ": invalid YAML: ", e.msg);
+DefaultCharacterConfig parse_config(const StrictYaml& y, const YAML::Node& root) {
+  DefaultCharacterConfig c;
+  c.file = y.file;
+  y.check_keys(root, "", {"name", "base", "mesh", "height_m", "body", "garment"});
+  if (root["name"]) c.name = y.get<std::string>(root["name"], "name", "a string");
+  if (root["base"]) {
+    // An existing character.yaml dressed with a generated garment: its body is used as is.
+    for (const char* k : {"mesh", "height_m", "body"})
+      if (root[k]) y.fail_at(root[k], k, "not with 'base' (the base character.yaml describes the body)");
+    c.base = fs::absolute(y.path(root["base"], "base")).lexically_normal().string();
+    const std::string ext = fs::path(c.base).extension().string();
+    if (ext != ".yaml" && ext != ".yml") y.fail_at(root["base"], "base", "expected a character.yaml, found " + c.base);
+    if (!root["name"]) c.name = fs::path(y.file).stem().string();
+  } else {
+    if (root["mesh"]) c.mesh = y.get<std::string>(root["mesh"], "mesh", "a file path");
+    if (c.mesh.empty()) y.fail_at(root["mesh"], "mesh", "expected a file path, found an empty one");
+    if (fs::path(c.mesh).is_relative()) c.mesh = (y.dir / c.mesh).lexically_normal().string();
+    if (root["height_m"]) c.height_m = y.positive(root["height_m"], "height_m");
+    if (const YAML::Node b = root["body"]) {
+      y.check_keys(b, "body", {"graph_nodes", "nodes_per_vertex"});
+      if (b["graph_nodes"]) c.body_graph_nodes = count(y, b["graph_nodes"], "body.graph_nodes", 1, 100000);
+      if (b["nodes_per_vertex"]) c.nodes_per_vertex = count(y, b["nodes_per_vertex"], "body.nodes_per_vertex", 1, 16);
+    }
   }
+  if (const YAML::Node g = root["garment"]) {
+    y.check_keys(g, "garment", {"type", "length", "flare", "clearance", "top_offset", "straps", "segments", "rings",
+                                "graph_nodes", "rigidity"});
+    if (const YAML::Node t = g["type"]) {
+      const std::string type = y.get<std::string>(t, "garment.type", "skirt, dress or none");
+      if (type == "skirt") c.garment = GarmentType::skirt;
+      else if (type == "dress") c.garment = GarmentType::dress;
+      else if (type == "none") c.garment = GarmentType::none;
+      else y.fail_at(t, "garment.type", "expected skirt, dress or none, found '" + type + "'");
+      if (!c.base.empty() && c.garment != GarmentType::skirt)
+        y.fail_at(t, "garment.type", "a 'base' character is dressed with a skirt only, found '" + type + "'");
+    }
+    if (g["length"]) c.length = y.positive(g["length"], "garment.length");
+    if (g["flare"]) c.flare = y.number(g["flare"], "garment.flare", 0, 1e3);
+    if (g["clearance"]) c.clearance = y.positive(g["clearance"], "garment.clearance");
+    if (g["top_offset"]) c.top_offset = y.number(g["top_offset"], "garment.top_offset");
+    if (g["straps"]) {
+      c.straps = y.get<bool>(g["straps"], "garment.straps", "true or false");
+      if (c.straps && c.garment != GarmentType::dress) y.fail_at(g["straps"], "garment.straps", "needs type: dress");
+    }
+    if (g["segments"]) c.segments = count(y, g["segments"], "garment.segments", 8, 4096);
+    if (g["rings"]) c.rings = count(y, g["rings"], "garment.rings", 2, 4096);
+    if (g["graph_nodes"]) c.cloth_graph_nodes = count(y, g["graph_nodes"], "garment.graph_nodes", 1, 100000);
+    if (g["rigidity"]) c.cloth_rigidity = y.number(g["rigidity"], "garment.rigidity", 0, 1);
+  }
+  return c;
 }
 
 }  // namespace
 
 DefaultCharacterConfig parse_default_character_config(const std::string& yaml_text, const std::string& name) {
-  const YAML::Node root = load_yaml(yaml_text, name);
+  const StrictYaml y{name, fs::path(name).parent_path()};
+  const YAML::Node root = y.parse(yaml_text);
   if (!root.IsMap()) fail(name, ": expected a map of character generation keys");
-  return parse_config(root, name, fs::path(name).parent_path());
+  return parse_config(y, root);
 }
 
 DefaultCharacterConfig load_default_character_config(const std::string& path) {
@@ -141,7 +103,26 @@ DefaultCharacterConfig load_default_character_config(const std::string& path) {
 
 // ------------------------------------------------------------------ building
 
-DefaultCharacter make_default_character(const DefaultCharacterConfig& cfg) {
+namespace {
+
+// The garment of a config in character units (lengths in the config are metres; flare is
+// a ratio). top_y and mid_x are the caller's.
+GarmentSpec garment_spec(const DefaultCharacterConfig& cfg, double metres_per_unit) {
+  GarmentSpec spec;
+  spec.type = cfg.garment;
+  spec.tube.length = cfg.length / metres_per_unit;
+  spec.tube.flare = cfg.flare;
+  spec.tube.clearance = cfg.clearance / metres_per_unit;
+  spec.tube.segments = cfg.segments;
+  spec.tube.rings = cfg.rings;
+  spec.graph_nodes = cfg.cloth_graph_nodes;
+  spec.nodes_per_vertex = cfg.nodes_per_vertex;
+  spec.rigidity = cfg.cloth_rigidity;
+  return spec;
+}
+
+// The MakeHuman path: body from a mesh file, skeleton and landmarks fitted to it. Metres.
+DefaultCharacter make_fitted_character(const DefaultCharacterConfig& cfg) {
   const std::string what = cfg.file.empty() ? cfg.mesh : cfg.file;
   DefaultCharacter out;
   out.loaded = load_body_mesh(cfg.mesh, cfg.height_m);
@@ -171,43 +152,63 @@ DefaultCharacter make_default_character(const DefaultCharacterConfig& cfg) {
   // Arms and hands (by geometry): their faces are left out of collisions, and garments
   // are sized without them.
   out.arm_vertices = arm_vertices(body.mesh, out.fit);
-  for (int f = 0; f < body.mesh.num_faces(); ++f)
-    if (out.arm_vertices[body.mesh.F(f, 0)] && out.arm_vertices[body.mesh.F(f, 1)] && out.arm_vertices[body.mesh.F(f, 2)])
-      ch.inactive_body_faces.push_back(f);
+  ch.inactive_body_faces = faces_of_vertices(body.mesh, out.arm_vertices);
 
   if (cfg.garment != GarmentType::none) {
-    TubeGarmentOptions o;
-    o.length = cfg.length;
-    o.flare = cfg.flare;
-    o.clearance = cfg.clearance;
-    o.segments = cfg.segments;
-    o.rings = cfg.rings;
-    o.top_y = cfg.garment == GarmentType::skirt ? out.fit.waist_y + cfg.top_offset : out.fit.armpit_y - cfg.top_offset;
-    if (o.top_y - o.length < 0) fail(what, ": the garment's hem would be below the floor (top at ", o.top_y, " m, length ", o.length, " m)");
-    TubeGarment g = generate_tube_garment(body.mesh, out.arm_vertices, o);
+    GarmentSpec spec = garment_spec(cfg, ch.metres_per_unit);
+    spec.tube.top_y =
+        cfg.garment == GarmentType::skirt ? out.fit.waist_y + cfg.top_offset : out.fit.armpit_y - cfg.top_offset;
     if (cfg.straps)
       for (const char* side : {"l_", "r_"}) {
         // Over the shoulder 60 % of the way out to the shoulder joint; the part above the
         // clavicles is anchored.
         const Vector3d& sh = out.fit.joints.at(std::string(side) + "shoulder");
         const Vector3d& cl = out.fit.joints.at(std::string(side) + "clavicle");
-        add_shoulder_strap(g, body.mesh, 0.6 * sh.x(), cfg.clearance, cl.y(), cfg.segments);
+        spec.straps.push_back({0.6 * sh.x(), cl.y()});
       }
-    out.garment_min_distance = g.min_distance;
-    out.garment_inside = g.inside;
-    CharacterMesh cloth;
-    cloth.path = std::string(garment_name(cfg.garment)) + ".obj";
-    cloth.mesh = g.mesh;
-    cloth.weights = transfer_weights_from_closest_point(body.mesh, body.weights, cloth.mesh);
-    EmbeddedGraphOptions cgo;
-    cgo.num_nodes = cfg.cloth_graph_nodes;
-    cgo.nodes_per_vertex = cfg.nodes_per_vertex;
-    cloth.graph = sample_embedded_graph(cloth.mesh, cgo);
-    cloth.graph.rigidity = Eigen::VectorXd::Constant(cloth.graph.num_nodes(), cfg.cloth_rigidity);
-    ch.attachment = attach_to_body(body.mesh, cloth.mesh, g.anchors);
-    ch.cloth = std::move(cloth);
+    out.garment_top_y = spec.tube.top_y;
+    const GarmentFit fit = dress_character(ch, spec, out.arm_vertices, what);
+    out.garment_min_distance = fit.min_distance;
+    out.garment_inside = fit.inside;
   }
   return out;
+}
+
+// The `base:` path: a loaded character.yaml, dressed as it is. The skirt's top ring is at
+// the hips (the BODY_25 hip keypoints in the bind pose) + top_offset, its axis in the
+// hips' midline plane; arms and hands by skinning weight (arm_vertices_from_skinning) are
+// ignored when sizing it and join the inactive faces.
+DefaultCharacter make_dressed_base_character(const DefaultCharacterConfig& cfg) {
+  const std::string what = cfg.file.empty() ? cfg.base : cfg.file;
+  DefaultCharacter out;
+  Character& ch = out.character;
+  ch = load_character(cfg.base);
+  if (ch.has_cloth()) fail(what, ": the base character ", cfg.base, " already has a cloth; dress one without");
+  ch.name = cfg.name;
+  ch.source = cfg.file;
+  out.arm_vertices = arm_vertices_from_skinning(ch);
+  const std::vector<int> arm_faces = faces_of_vertices(ch.body.mesh, out.arm_vertices);
+  std::vector<int>& inactive = ch.inactive_body_faces;
+  inactive.insert(inactive.end(), arm_faces.begin(), arm_faces.end());
+  std::sort(inactive.begin(), inactive.end());
+  inactive.erase(std::unique(inactive.begin(), inactive.end()), inactive.end());
+  if (cfg.garment != GarmentType::none) {
+    const Vector3d hips = bind_pose_hip_centre(ch, what);
+    GarmentSpec spec = garment_spec(cfg, ch.metres_per_unit);
+    spec.tube.top_y = hips.y() + cfg.top_offset / ch.metres_per_unit;
+    spec.tube.mid_x = hips.x();
+    out.garment_top_y = spec.tube.top_y;
+    const GarmentFit fit = dress_character(ch, spec, out.arm_vertices, what);
+    out.garment_min_distance = fit.min_distance;
+    out.garment_inside = fit.inside;
+  }
+  return out;
+}
+
+}  // namespace
+
+DefaultCharacter make_default_character(const DefaultCharacterConfig& cfg) {
+  return cfg.base.empty() ? make_fitted_character(cfg) : make_dressed_base_character(cfg);
 }
 
 // ------------------------------------------------------------------ writing
@@ -227,6 +228,59 @@ std::string yaml_number(double v) {
   return std::string(buf, r.ptr);
 }
 
+// A base character.yaml with its paths made absolute (its files stay where they are),
+// the dressed character's name, inactive faces (base's and the arms', written to `dir`) and
+// the generated cloth.
+std::string write_dressed_base_character(const DefaultCharacter& dc, const DefaultCharacterConfig& cfg,
+                                         const fs::path& d) {
+  const Character& ch = dc.character;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(cfg.base);
+  } catch (const YAML::Exception& e) {
+    fail(cfg.base, ": cannot read the base character again: ", e.what());
+  }
+  const fs::path base_dir = fs::path(cfg.base).parent_path();
+  auto absolute = [&](YAML::Node node, const char* key) {
+    if (node[key]) node[key] = (base_dir / node[key].as<std::string>()).lexically_normal().string();
+  };
+  root["name"] = ch.name;
+  absolute(root, "skeleton");
+  absolute(root, "rest_pose");
+  YAML::Node body = root["body"];
+  for (const char* key : {"mesh", "skin", "labels", "graph"}) absolute(body, key);
+  body.remove("inactive_labels");  // their faces are in the written list
+  body.remove("inactive_faces");
+  if (!ch.inactive_body_faces.empty()) {
+    write_indices((d / "inactive_faces.txt").string(), ch.inactive_body_faces);
+    body["inactive_faces"] = "inactive_faces.txt";
+  }
+  if (ch.cloth) {
+    const std::string mesh = std::string(garment_name(cfg.garment)) + ".obj";
+    write_obj((d / mesh).string(), ch.cloth->mesh);
+    std::vector<int> anchors(ch.attachment.anchors.data(), ch.attachment.anchors.data() + ch.attachment.size());
+    write_indices((d / "anchors.txt").string(), anchors);
+    YAML::Node cloth = root["cloth"];
+    cloth["mesh"] = mesh;
+    cloth["graph_nodes"] = ch.cloth->graph.num_nodes();
+    cloth["nodes_per_vertex"] = cfg.nodes_per_vertex;
+    cloth["rigidity"]["default"] = yaml_number(cfg.cloth_rigidity);
+    cloth["anchors"] = "anchors.txt";
+  }
+  YAML::Emitter out;
+  out << root;
+  std::ostringstream y;
+  y << "# Generated by `weft character` from " << (cfg.file.empty() ? std::string("a config") : cfg.file)
+    << " (docs/CHARACTER.md,\n# \"Dressing an existing character\"). The base, " << cfg.base << ", its files\n"
+    << "# referenced where they are (absolute paths, never copied), dressed with a generated "
+    << garment_name(cfg.garment) << " (" << garment_name(cfg.garment) << ".obj, anchors.txt).\n"
+    << "# inactive_faces.txt: the base's inactive faces and its arms and hands (by skinning weight).\n"
+    << out.c_str() << "\n";
+  const std::string yaml = (d / "character.yaml").string();
+  write_text_atomically(yaml, y.str());
+  return yaml;
+}
+
 }  // namespace
 
 std::string write_default_character(const DefaultCharacter& dc, const DefaultCharacterConfig& cfg,
@@ -236,6 +290,7 @@ std::string write_default_character(const DefaultCharacter& dc, const DefaultCha
   fs::create_directories(dir, ec);
   if (!fs::is_directory(dir)) fail(dir, ": cannot create the output folder");
   const fs::path d(dir);
+  if (!cfg.base.empty()) return write_dressed_base_character(dc, cfg, d);
   write_obj((d / "body.obj").string(), ch.body.mesh);
   write_skeleton((d / "body.skeleton").string(), ch.skeleton);
   Motion rest;

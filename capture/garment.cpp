@@ -64,8 +64,8 @@ TubeGarment generate_tube_garment(const TriangleMesh& body, const std::vector<ch
     const auto sections = slice_mesh(body, Vector3d::UnitY(), o.top_y);
     const Section* best = nullptr;
     for (const Section& s : sections)
-      if (s.lo.x() < 0 && s.hi.x() > 0 && (!best || s.area > best->area)) best = &s;
-    if (!best) fail("garment: no body cross-section crosses x = 0 at the top height ", o.top_y);
+      if (s.lo.x() < o.mid_x && s.hi.x() > o.mid_x && (!best || s.area > best->area)) best = &s;
+    if (!best) fail("garment: no body cross-section crosses x = ", o.mid_x, " at the top height ", o.top_y);
     g.centre = Eigen::Vector2d(best->centroid.x(), best->centroid.z());
   }
 

@@ -17,6 +17,7 @@ struct TubeGarmentOptions {
   double clearance = 0.01; // minimum distance to the body in the bind pose (units)
   int segments = 64;       // vertices around each ring
   int rings = 48;          // rings from top to hem (≥ 2)
+  double mid_x = 0;        // the body's midline plane x = mid_x (units): the axis is found there
 };
 
 struct TubeGarment {
@@ -29,7 +30,8 @@ struct TubeGarment {
 
 // `excluded` (per body vertex, may be empty) marks vertices the garment may ignore when it
 // sizes itself (the arms and hands: the skirt goes under the hands in the A-pose). The
-// axis passes through the centroid of the body's cross-section at top_y. After sizing,
+// axis passes through the centroid of the largest body cross-section at top_y that
+// crosses the midline plane x = mid_x (Y up, the body facing ±z). After sizing,
 // every garment vertex closer than `clearance` to the non-excluded body is pushed
 // outward until it clears it. Deterministic.
 TubeGarment generate_tube_garment(const TriangleMesh& body, const std::vector<char>& excluded,
