@@ -482,8 +482,11 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
       rep.newton_iterations = r.newton_iterations;
       rep.penetration_max = m.penetration_max;
       rep.oob_force_max_rel = m.oob_force_max_rel;
-      rep.failed = !(r.status == physics::StepStatus::converged || r.status == physics::StepStatus::max_iterations) ||
-                   m.penetration_max > s.max_penetration || !r.x.allFinite();
+      // Failed: ended more than 10× Newton's tolerance from equilibrium (a step stopped by the
+      // iteration cap or the line search close to it is kept), non-finite, or too deep.
+      const bool near_converged = r.status == physics::StepStatus::converged ||
+                                  (r.status != physics::StepStatus::non_finite && r.last.residual <= 10 * s.tolerance);
+      rep.failed = !near_converged || m.penetration_max > s.max_penetration || !r.x.allFinite();
       physics::FrameRecord rec;
       rec.frame = f;
       rec.status = r.status;
