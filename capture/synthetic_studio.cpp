@@ -94,7 +94,8 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
 }
 
 void parse_render(const StrictYaml& y, const YAML::Node& n, SynthRenderConfig& r) {
-  y.check_keys(n, "render.", {"background", "supersample", "dt_scale"});
+  y.check_keys(n, "render.", {"background", "supersample", "dt_scale", "body_texture"});
+  if (n["body_texture"]) r.body_texture = y.path(n["body_texture"], "render.body_texture");
   if (n["background"]) {
     const std::string b = y.get<std::string>(n["background"], "render.background", "green or clutter");
     if (b == "green") r.background = BackgroundKind::solid;
@@ -542,6 +543,14 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
       cfg.render.background == BackgroundKind::clutter
           ? cluttered_background(cameras[0][0].width, cameras[0][0].height, cfg.seed)
           : cv::Mat();
+  cv::Mat body_texture;
+  if (!cfg.render.body_texture.empty()) {
+    body_texture = cv::imread(cfg.render.body_texture, cv::IMREAD_COLOR);
+    WEFT_CHECK(!body_texture.empty(), cfg.render.body_texture, ": cannot read the body texture (", cfg.file,
+               ": render.body_texture)");
+    WEFT_CHECK(ch.body.mesh.has_uv(), cfg.file, ": render.body_texture needs texture coordinates in the body mesh ",
+               ch.body.path, ", which has none");
+  }
   const auto t_render = Clock::now();
   tbb::parallel_for(0, frames * num_views, [&](int job) {
     const int f = job / num_views, v = job % num_views;
@@ -552,6 +561,10 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     body.vertices = &posed[f].body;
     body.part = 1;
     body.color = cv::Scalar(150, 175, 215);  // BGR: skin
+    if (!body_texture.empty()) {
+      body.source = ColorSource::texture;
+      body.texture = body_texture;
+    }
     garment.mesh = &cloth_mesh;
     garment.vertices = &cloth[f];
     garment.part = 2;

@@ -58,6 +58,7 @@ struct SynthRenderConfig {
   BackgroundKind background = BackgroundKind::solid;  // solid (green screen) or clutter
   int supersample = 1;
   double dt_scale = 16;    // dt PNG value = min(65535, round(dt_scale · distance in pixels))
+  std::string body_texture;  // an image for the body's OBJ texture coordinates (ddc.png); empty: flat skin colour
 };
 
 struct SynthConfig {
