@@ -102,7 +102,7 @@ int main(int argc_all, char** argv_all) {
   const int argc = static_cast<int>(positional.size());
   char** argv = positional.data();
   const std::string scene = argc > 1 ? argv[1] : "drape";
-  const std::string solver = argc > 2 ? argv[2] : "reused_factor";
+  const std::string solver = argc > 2 ? argv[2] : "direct";
   const int n = argc > 3 ? std::atoi(argv[3]) : 32;
   const int frames = argc > 4 ? std::atoi(argv[4]) : 30;
   const std::string cholesky = argc > 5 ? argv[5] : "automatic";
