@@ -8,7 +8,9 @@
 //             running_var  = (1 − m) running_var  + m σ²_B · M / (M − 1)   (unbiased);
 //   eval:     the same with the running statistics, which are left alone.
 // Gradients flow to x, weight and bias (training: through the batch statistics too);
-// the running statistics get none. Per-channel sums accumulate in double.
+// the running statistics get none. Per-channel sums accumulate in double, the
+// normalisation is computed in double and rounded once, and the batch statistics are
+// saved for the backward in double.
 #include <cmath>
 #include <vector>
 
@@ -59,10 +61,12 @@ Tensor bn_forward(const ForwardContext& c, const BnGeometry& g, bool training) {
   T* prm = running_mean.data<T>();
   T* prv = running_var.data<T>();
 
-  Tensor mean = Tensor::empty({g.C}, x.dtype());
-  Tensor invstd = Tensor::empty({g.C}, x.dtype());
-  T* pmean = mean.data<T>();
-  T* pinv = invstd.data<T>();
+  // Saved in double whatever T is: the backward's x̂ = (x − μ) · inv then uses the exact
+  // batch statistics, not their float32 roundings.
+  Tensor mean = Tensor::empty({g.C}, DType::F64);
+  Tensor invstd = Tensor::empty({g.C}, DType::F64);
+  double* pmean = mean.data<double>();
+  double* pinv = invstd.data<double>();
   Tensor y = Tensor::empty(x.shape(), x.dtype());
   T* py = y.data<T>();
   const double M = static_cast<double>(g.M());
@@ -90,15 +94,17 @@ Tensor bn_forward(const ForwardContext& c, const BnGeometry& g, bool training) {
       var = prv[ch];
     }
     const double inv = 1.0 / std::sqrt(var + eps);
-    pmean[ch] = static_cast<T>(mu);
-    pinv[ch] = static_cast<T>(inv);
-    // y = x · a + b'  with a = inv · w, b' = b − μ · a
-    const T a = static_cast<T>(inv * pw[ch]);
-    const T shift = static_cast<T>(pb[ch] - mu * inv * pw[ch]);
+    pmean[ch] = mu;
+    pinv[ch] = inv;
+    // y = x · a + b'  with a = inv · w, b' = b − μ · a, in double and rounded once: in
+    // float32 the rounded a and b' and the cancellation of x · a against b' (|μ| ≫ σ)
+    // cost up to a few ulps of y.
+    const double a = inv * pw[ch];
+    const double shift = pb[ch] - mu * a;
     for (int64_t n = 0; n < g.N; ++n) {
       const T* p = px + (n * g.C + ch) * g.S;
       T* q = py + (n * g.C + ch) * g.S;
-      for (int64_t i = 0; i < g.S; ++i) q[i] = p[i] * a + shift;
+      for (int64_t i = 0; i < g.S; ++i) q[i] = static_cast<T>(p[i] * a + shift);
     }
   }
   c.saved.push_back(mean);
@@ -112,8 +118,8 @@ std::vector<Tensor> bn_backward(const BackwardContext& c, const BnGeometry& g, b
   const T* px = x.data<T>();
   const T* pw = c.in(1).data<T>();
   const T* pgy = c.grad_output.data<T>();
-  const T* pmean = c.saved.at(0).data<T>();
-  const T* pinv = c.saved.at(1).data<T>();
+  const double* pmean = c.saved.at(0).data<double>();
+  const double* pinv = c.saved.at(1).data<double>();
   const bool want_x = c.needs_grad[0], want_w = c.needs_grad[1], want_b = c.needs_grad[2];
   Tensor gx, gw, gb;
   if (want_x) gx = Tensor::empty(x.shape(), x.dtype());
