@@ -26,9 +26,10 @@ std::string python() {
 }
 
 // weft's errors may be this many times PyTorch float32's. The issue asks for 1.0; the
-// measured worst ratios are 1.3-1.8 (see docs/NN.md), so the test guards the semantics
-// (a wrong layout, stride or statistic gives errors orders of magnitude larger) while
-// the remaining accuracy gap is tracked there.
+// measured worst per-tensor ratios are 1.3-1.9 over seeds 0-4 (seed 0: 1.85 and 0.96), all
+// from the conv GEMM's float32 summation (docs/BENCHMARKS.md, accuracy against PyTorch),
+// so the test guards the semantics (a wrong layout, stride or statistic gives errors
+// orders of magnitude larger) while that gap is tracked there.
 constexpr const char* kTolerance = "2.0";
 
 void run_parity(const std::string& args) {
