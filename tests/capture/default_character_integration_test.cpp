@@ -15,6 +15,8 @@ using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using Eigen::Vector3d;
 
+using weft::capture::testing::slurp;
+
 namespace {
 
 const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
@@ -38,13 +40,6 @@ Vector3d joint(const Character& ch, const std::string& name) {
   const int j = ch.skeleton.joint_index(name);
   EXPECT_GE(j, 0) << name;
   return ch.bind[j].translation();
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 }  // namespace

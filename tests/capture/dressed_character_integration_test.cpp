@@ -20,6 +20,8 @@ using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using Eigen::Vector3d;
 
+using weft::capture::testing::slurp;
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -39,13 +41,6 @@ const DefaultCharacterConfig& config() {
 const DefaultCharacter& dressed() {
   static const auto dc = std::make_unique<DefaultCharacter>(make_default_character(config()));
   return *dc;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 }  // namespace

@@ -33,6 +33,8 @@ using weft::capture::testing::centre_sampled_silhouette;
 using weft::capture::testing::opencv_silhouette;
 namespace fs = std::filesystem;
 
+using weft::capture::testing::slurp;
+
 namespace {
 
 const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
@@ -90,13 +92,6 @@ const Dataset& dataset() {
 
 std::string frame_path(const fs::path& dir, const char* kind, const std::string& view, int frame, const char* suffix) {
   return (dir / kind / view / (dataset_frame_name(frame) + suffix)).string();
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 double iou(const cv::Mat& a, const cv::Mat& b) {
