@@ -76,10 +76,11 @@ const SparseHessian& NewtonSolver::hessian(const Eigen::VectorXd& x) {
   return hessian_;
 }
 
-NewtonSolver::CgOutcome NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
-                                                   NewtonReport& report) {
-  // Preconditioned CG on (H + δI) d = −g with the (possibly older) Cholesky factor, to a
-  // residual of cg_relative_tolerance·‖g‖.
+NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, const Eigen::VectorXd& g,
+                                                        Eigen::VectorXd& d, NewtonReport& report) {
+  // CG on (H + δI) d = −g from d = 0, preconditioned by the (possibly older) Cholesky
+  // factor, to a residual of cg_relative_tolerance·‖g‖. On non-positive curvature d keeps
+  // the last iterate (every iterate before it is a descent direction).
   const Eigen::VectorXd b = -g;
   d.setZero(b.size());
   Eigen::VectorXd r = b;
@@ -88,7 +89,7 @@ NewtonSolver::CgOutcome NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eig
   double rz = r.dot(z);
   const double target = options_.cg_relative_tolerance * b.norm();
   for (int k = 0; k < options_.cg_max_iterations; ++k) {
-    Eigen::VectorXd hp = hessian_.multiply(p);
+    Eigen::VectorXd hp = H.multiply(p);
     hp += delta_ * p;
     const double php = p.dot(hp);
     if (!(php > 0)) return CgOutcome::negative_curvature;
@@ -105,36 +106,19 @@ NewtonSolver::CgOutcome NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eig
   return CgOutcome::too_slow;
 }
 
+NewtonSolver::CgOutcome NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
+                                                   NewtonReport& report) {
+  return preconditioned_cg(hessian_, g, d, report);
+}
+
 void NewtonSolver::exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
                                    NewtonReport& report) {
   // Truncated CG on the exact (H_exact + δI) d = −g, preconditioned by the factor of the
-  // corrected H + δI. Every iterate before a direction of non-positive curvature is a
-  // descent direction; if the very first direction has one, the preconditioned step
-  // (the corrected Newton direction) is used.
-  const Eigen::VectorXd b = -g;
-  Eigen::VectorXd r = b;
-  Eigen::VectorXd z = cholmod_->solve(r);
-  d = z;  // the corrected Newton direction, the fallback
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(b.size());
-  Eigen::VectorXd p = z;
-  double rz = r.dot(z);
-  const double target = options_.cg_relative_tolerance * b.norm();
-  for (int k = 0; k < options_.cg_max_iterations; ++k) {
-    Eigen::VectorXd hp = exact_hessian_.multiply(p);
-    hp += delta_ * p;
-    const double php = p.dot(hp);
-    if (!(php > 0)) break;
-    const double alpha = rz / php;
-    x += alpha * p;
-    r -= alpha * hp;
-    d = x;
-    ++report.cg_iterations;
-    if (r.norm() <= target) break;
-    z = cholmod_->solve(r);
-    const double rz_new = r.dot(z);
-    p = z + (rz_new / rz) * p;
-    rz = rz_new;
-  }
+  // corrected H + δI. If the very first direction has non-positive curvature, the
+  // preconditioned step (the corrected Newton direction) is used.
+  const int before = report.cg_iterations;
+  preconditioned_cg(exact_hessian_, g, d, report);
+  if (report.cg_iterations == before) d = cholmod_->solve(-g);
 }
 
 bool NewtonSolver::correct_hessian(const Eigen::VectorXd& x, NewtonReport& report) {

@@ -101,6 +101,8 @@ class NewtonSolver {
   bool direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g, Eigen::VectorXd& d,
                  NewtonReport& report);
   enum class CgOutcome { converged, negative_curvature, too_slow };
+  CgOutcome preconditioned_cg(const SparseHessian& H, const Eigen::VectorXd& g, Eigen::VectorXd& d,
+                              NewtonReport& report);
   CgOutcome cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
   // Truncated PCG on the exact Hessian with the corrected Hessian's factor (see direct).
   void exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
