@@ -8,6 +8,7 @@
 #include "capture/camera.h"
 #include "capture/openpose.h"
 #include "capture/text_reader.h"
+#include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
@@ -32,16 +33,9 @@ TEST(Camera, ProjectionMatchesOpenCvProjectPoints) {
   const Camera c = test_camera();
   Vertices X(6, 3);
   X << 0, 0, 0, 400, 800, 100, -600, 1500, -300, 900, -200, 200, 10, 20, 30, -800, -900, 0;
-  std::vector<cv::Point3d> pts;
-  for (int i = 0; i < X.rows(); ++i) pts.emplace_back(X(i, 0), X(i, 1), X(i, 2));
-  cv::Mat K, R, rvec, tvec(3, 1, CV_64F), dist(1, 5, CV_64F);
-  cv::eigen2cv(c.K, K);
-  cv::eigen2cv(c.R, R);
-  cv::Rodrigues(R, rvec);
-  for (int k = 0; k < 3; ++k) tvec.at<double>(k) = c.t(k);
-  for (int k = 0; k < 5; ++k) dist.at<double>(k) = c.dist(k);
-  std::vector<cv::Point2d> ref;
-  cv::projectPoints(pts, rvec, tvec, K, dist, ref);
+  TriangleMesh points;
+  points.V = X;
+  const std::vector<cv::Point2d> ref = weft::capture::testing::opencv_projection(c, points);
   const Points2 uv = project_points(c, X);
   for (int i = 0; i < X.rows(); ++i) {
     EXPECT_NEAR(uv(i, 0), ref[i].x, 1e-6) << i;
