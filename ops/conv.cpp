@@ -5,6 +5,8 @@
 //   y_n   [O, P]   = W [O, K] · col_n + bias
 //   dW    [O, K]  += dy_n · col_nᵀ
 //   dcol  [K, P]   = Wᵀ · dy_n,  dx_n = col2im(dcol)   (1×1 fast path: dx_n = Wᵀ · dy_n)
+// Every product sums its depth (K, O or the columns) in short blocks
+// (ops/depth_blocked_gemm.h), which keeps float32 results within PyTorch's accuracy.
 //
 // Threading (see conv_plan): OpenMP over groups of images, each GEMM single-threaded,
 // when there are at least as many images as threads; else the images in turn with
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include "graph/threads.h"
+#include "ops/depth_blocked_gemm.h"
 #include "ops/ops.h"
 
 namespace weft {
@@ -259,7 +262,7 @@ Tensor conv_forward(const std::vector<Tensor>& in, const ConvGeometry& g) {
     // One image writes straight into y; a group is staged and then split per image.
     T* out = Gi == 1 ? py + n0 * g.O * P : scratch<T, 1>(g.O * ld);
     Eigen::Map<RowMat<T>> Y(out, g.O, ld);
-    Y.noalias() = Wm * CMapMat<T>(col, K, ld);
+    gemm_in_depth_blocks(Y, Wm, CMapMat<T>(col, K, ld), false);
     if (pb) Y.colwise() += CMapVec<T>(pb, g.O);
     if (Gi > 1)
       for (int64_t j = 0; j < Gi; ++j) unpack_image(out + j * P, g.O, P, ld, py + (n0 + j) * g.O * P);
@@ -322,15 +325,15 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
     if (want_w) {
       const T* col = build_columns(px, g, n0, Gi);
       Eigen::Map<RowMat<T>> GW(gw_acc, g.O, K);
-      if (first) GW.noalias() = GY * CMapMat<T>(col, K, ld).transpose();
-      else GW.noalias() += GY * CMapMat<T>(col, K, ld).transpose();
+      gemm_in_depth_blocks(GW, GY, CMapMat<T>(col, K, ld).transpose(), !first);
     }
     if (want_x) {
       if (g.pointwise() && Gi == 1) {
-        Eigen::Map<RowMat<T>>(pgx + n0 * CHW, g.C, P).noalias() = Wm.transpose() * GY;
+        gemm_in_depth_blocks(Eigen::Map<RowMat<T>>(pgx + n0 * CHW, g.C, P), Wm.transpose(), GY,
+                             false);
       } else {
         T* dcol = scratch<T, 0>(K * ld);  // the columns are no longer needed
-        Eigen::Map<RowMat<T>>(dcol, K, ld).noalias() = Wm.transpose() * GY;
+        gemm_in_depth_blocks(Eigen::Map<RowMat<T>>(dcol, K, ld), Wm.transpose(), GY, false);
         for (int64_t j = 0; j < Gi; ++j) {
           T* gxn = pgx + (n0 + j) * CHW;
           if (g.pointwise()) {

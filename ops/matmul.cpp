@@ -1,8 +1,10 @@
-// matmul and linear on Eigen's GEMM. Tensors are mapped in place as row-major matrices
-// (no copies); transposes are expressed through the maps, so a backward costs two GEMMs.
+// matmul and linear on Eigen's GEMM, summed in depth blocks (ops/depth_blocked_gemm.h).
+// Tensors are mapped in place as row-major matrices (no copies); transposes are expressed
+// through the maps, so a backward costs two GEMMs.
 #include <Eigen/Core>
 #include <vector>
 
+#include "ops/depth_blocked_gemm.h"
 #include "ops/ops.h"
 
 namespace weft {
@@ -21,13 +23,13 @@ template <class T>
 void gemm(const T* a, bool ta, const T* b, bool tb, T* c, int64_t n, int64_t k, int64_t m) {
   MMap<T> C(c, n, m);
   if (!ta && !tb)
-    C.noalias() = CMap<T>(a, n, k) * CMap<T>(b, k, m);
+    gemm_in_depth_blocks(C, CMap<T>(a, n, k), CMap<T>(b, k, m), false);
   else if (!ta && tb)
-    C.noalias() = CMap<T>(a, n, k) * CMap<T>(b, m, k).transpose();
+    gemm_in_depth_blocks(C, CMap<T>(a, n, k), CMap<T>(b, m, k).transpose(), false);
   else if (ta && !tb)
-    C.noalias() = CMap<T>(a, k, n).transpose() * CMap<T>(b, k, m);
+    gemm_in_depth_blocks(C, CMap<T>(a, k, n).transpose(), CMap<T>(b, k, m), false);
   else
-    C.noalias() = CMap<T>(a, k, n).transpose() * CMap<T>(b, m, k).transpose();
+    gemm_in_depth_blocks(C, CMap<T>(a, k, n).transpose(), CMap<T>(b, m, k).transpose(), false);
 }
 
 // Many small products are faster split over threads one matrix each than with Eigen
@@ -184,7 +186,8 @@ WEFT_REGISTER_OP(linear) {
     Tensor out = Tensor::empty(p.out_shape, x.dtype());
     dispatch_float(x.dtype(), "linear", [&]<class T>() {
       MMap<T> Y(out.data<T>(), p.rows, p.out);
-      Y.noalias() = CMap<T>(x.data<T>(), p.rows, p.in) * CMap<T>(w.data<T>(), p.out, p.in).transpose();
+      gemm_in_depth_blocks(Y, CMap<T>(x.data<T>(), p.rows, p.in),
+                           CMap<T>(w.data<T>(), p.out, p.in).transpose(), false);
       if (c.inputs.size() == 3)
         Y.rowwise() += Eigen::Map<const Eigen::Matrix<T, 1, Eigen::Dynamic>>(c.in(2).data<T>(), p.out);
     });

@@ -25,12 +25,12 @@ std::string python() {
   return fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
 }
 
-// weft's errors may be this many times PyTorch float32's. The issue asks for 1.0; the
-// measured worst per-tensor ratios are 1.3-1.9 over seeds 0-4 (seed 0: 1.85 and 0.96), all
-// from the conv GEMM's float32 summation (docs/BENCHMARKS.md, accuracy against PyTorch),
-// so the test guards the semantics (a wrong layout, stride or statistic gives errors
-// orders of magnitude larger) while that gap is tracked there.
-constexpr const char* kTolerance = "2.0";
+// weft's errors may be at most PyTorch float32's (issue 4). Measured worst per-tensor
+// ratios over seeds 0-4: ResNet-18 training 0.92, ResNet-50 eval 0.76 (median 0.57 and
+// 0.47), since products sum their depth in short chains (ops/depth_blocked_gemm.h;
+// docs/BENCHMARKS.md, accuracy against PyTorch). Gradients moved by a ReLU/max-pool tie
+// that flips in one float32 run only are excused by the script (below 2e-2, reported).
+constexpr const char* kTolerance = "1.0";
 
 void run_parity(const std::string& args) {
   const fs::path weft = weft_executable();
