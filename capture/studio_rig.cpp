@@ -74,7 +74,8 @@ void check_wild(const WildCameraConfig& c, int frames, double fps) {
   for (auto [key, value] : {std::pair{"shake_position_m", c.shake_position_m},
                             {"shake_rotation_deg", c.shake_rotation_deg},
                             {"shake_frequency_hz", c.shake_frequency_hz},
-                            {"exposure_frequency_hz", c.exposure_frequency_hz}})
+                            {"exposure_frequency_hz", c.exposure_frequency_hz},
+                            {"follow_smoothing_s", c.follow_smoothing_s}})
     if (!(value >= 0) || !std::isfinite(value)) fail(what, ": ", key, " must be ≥ 0 and finite, got ", value);
   if (!(c.exposure_min > 0) || !(c.exposure_max >= c.exposure_min) || !std::isfinite(c.exposure_max))
     fail(what, ": expected 0 < exposure_min ≤ exposure_max, got ", c.exposure_min, " and ", c.exposure_max);
@@ -146,9 +147,47 @@ std::vector<Camera> studio_rig(const StudioRigConfig& c) {
   return cameras;
 }
 
-std::vector<Camera> wild_camera_path(const WildCameraConfig& c, int frames, double fps, uint64_t seed) {
+std::vector<Eigen::Vector3d> smooth_track(const std::vector<Eigen::Vector3d>& track, double sigma_frames) {
+  if (!(sigma_frames >= 0) || !std::isfinite(sigma_frames))
+    fail("smooth_track: sigma must be ≥ 0 and finite, got ", sigma_frames);
+  if (sigma_frames == 0) return track;
+  const int n = static_cast<int>(track.size());
+  const int reach = static_cast<int>(std::ceil(3 * sigma_frames));
+  // At each frame, a straight line fitted by Gaussian-weighted least squares, evaluated
+  // there: the weighted mean in the interior, and no lag behind a steady walk at the ends.
+  std::vector<Eigen::Vector3d> out(n);
+  for (int i = 0; i < n; ++i) {
+    double s0 = 0, s1 = 0, s2 = 0;  // Σw, Σw·d, Σw·d² with d = j − i
+    Eigen::Vector3d sy = Eigen::Vector3d::Zero(), sdy = Eigen::Vector3d::Zero();
+    for (int j = std::max(0, i - reach); j <= std::min(n - 1, i + reach); ++j) {
+      const double d = j - i, w = std::exp(-0.5 * d * d / (sigma_frames * sigma_frames));
+      s0 += w, s1 += w * d, s2 += w * d * d;
+      sy += w * track[j];
+      sdy += w * d * track[j];
+    }
+    const double det = s0 * s2 - s1 * s1;
+    out[i] = det > 1e-12 * s0 * s2 ? Eigen::Vector3d((s2 * sy - s1 * sdy) / det) : Eigen::Vector3d(sy / s0);
+  }
+  return out;
+}
+
+std::vector<Camera> wild_camera_path(const WildCameraConfig& c, int frames, double fps, uint64_t seed,
+                                     const std::vector<Eigen::Vector3d>& subject_track) {
   check_wild(c, frames, fps);
   const double unit = 1.0 / c.metres_per_unit;
+  // The subject's displacement over the ground since frame 0, metres, per frame.
+  std::vector<Eigen::Vector3d> follow(frames, Eigen::Vector3d::Zero());
+  if (!subject_track.empty() && c.follow_subject) {
+    if (static_cast<int>(subject_track.size()) != frames)
+      fail("wild camera path: the subject track has ", subject_track.size(), " positions for ", frames, " frames");
+    for (size_t i = 0; i < subject_track.size(); ++i)
+      if (!subject_track[i].allFinite()) fail("wild camera path: the subject track is not finite at frame ", i);
+    const std::vector<Eigen::Vector3d> smooth = smooth_track(subject_track, c.follow_smoothing_s * fps);
+    for (int i = 0; i < frames; ++i) {
+      follow[i] = (smooth[i] - smooth[0]) * c.metres_per_unit;
+      follow[i].y() = 0;
+    }
+  }
   std::array<SmoothNoise, 3> position{SmoothNoise(mix_seed(seed, position_shake, 0), c.shake_frequency_hz),
                                       SmoothNoise(mix_seed(seed, position_shake, 1), c.shake_frequency_hz),
                                       SmoothNoise(mix_seed(seed, position_shake, 2), c.shake_frequency_hz)};
@@ -163,10 +202,10 @@ std::vector<Camera> wild_camera_path(const WildCameraConfig& c, int frames, doub
     const double ease = s * s * (3 - 2 * s);  // smoothstep: starts and stops at rest
     const double azimuth = (c.start_azimuth_deg + c.arc_deg * ease) * kDegree;
     const double radius = c.radius_start_m + (c.radius_end_m - c.radius_start_m) * ease;
-    Eigen::Vector3d centre(c.target_m.x() + radius * std::sin(azimuth), c.height_m,
-                           c.target_m.z() + radius * std::cos(azimuth));
+    const Eigen::Vector3d target = c.target_m + follow[i];
+    Eigen::Vector3d centre(target.x() + radius * std::sin(azimuth), c.height_m, target.z() + radius * std::cos(azimuth));
     for (int a = 0; a < 3; ++a) centre(a) += c.shake_position_m * position[a](t);
-    Camera cam = look_at_camera(numbered("wild", i, 4), centre * unit, c.target_m * unit, c.width, c.height,
+    Camera cam = look_at_camera(numbered("wild", i, 4), centre * unit, target * unit, c.width, c.height,
                                 c.vertical_fov_deg, c.k1);
     // Hand-held wobble of the viewing direction, in the camera's own axes.
     const double yaw = c.shake_rotation_deg * kDegree * rotation[0](t);

@@ -60,6 +60,10 @@ int studio_rig_rings(const StudioRigConfig& config);
 // of its position and viewing direction, each axis a sum of three sinusoids with seeded
 // frequencies in [0.4, 1] · shake_frequency_hz and seeded phases, bounded by the
 // amplitudes. Exposure varies smoothly the same way between exposure_min and exposure_max.
+// Given the subject's track, the operator follows the subject: the orbit's centre and the
+// aim point move with the subject over the ground (x and z; not its height), the track
+// smoothed over follow_smoothing_s seconds (smooth_track), relative to frame 0 (so frame 0
+// is where the config puts it).
 struct WildCameraConfig {
   int width = 512, height = 512;  // pixels
   double vertical_fov_deg = 50;
@@ -73,13 +77,24 @@ struct WildCameraConfig {
   double k1 = 0;
   double exposure_min = 0.6, exposure_max = 1.3;  // Lighting::exposure range
   double exposure_frequency_hz = 0.2;             // highest frequency of the lighting changes
+  bool follow_subject = true;       // use the subject track when one is given
+  double follow_smoothing_s = 0.5;  // σ of the track's smoothing, seconds (0: follow exactly)
   double metres_per_unit = 1.0;
 };
 
 // `frames` cameras named "wild0000", "wild0001", …, frame i at time i / fps seconds.
-// Deterministic for a seed on every platform (capture/portable_random.h). Throws
-// weft::Error naming the field for an invalid config, frames < 1 or fps ≤ 0.
-std::vector<Camera> wild_camera_path(const WildCameraConfig& config, int frames, double fps, uint64_t seed);
+// subject_track: empty (the camera aims at target_m throughout) or one position per frame
+// in character units, e.g. the root joint's (see follow_subject). Deterministic for a seed
+// on every platform (capture/portable_random.h). Throws weft::Error naming the field for an
+// invalid config, frames < 1, fps ≤ 0 or a track of the wrong length or non-finite.
+std::vector<Camera> wild_camera_path(const WildCameraConfig& config, int frames, double fps, uint64_t seed,
+                                     const std::vector<Eigen::Vector3d>& subject_track = {});
+
+// The track smoothed over time: at each frame the value of a straight line fitted to the
+// frames around it by least squares with Gaussian weights of sigma_frames (the Gaussian
+// mean in the interior; a steady motion is reproduced up to the ends, without lag).
+// sigma_frames = 0 returns the track.
+std::vector<Eigen::Vector3d> smooth_track(const std::vector<Eigen::Vector3d>& track, double sigma_frames);
 
 // Per-frame Lighting::exposure in [exposure_min, exposure_max], smooth in time; the same
 // seed gives the same schedule (independent of the camera path's shake).

@@ -144,7 +144,7 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
     y.check_keys(n, "cameras.", {"rig", "width", "height", "vertical_fov_deg", "radius_start_m", "radius_end_m",
                                  "height_m", "target_m", "start_azimuth_deg", "arc_deg", "shake_position_m",
                                  "shake_rotation_deg", "shake_frequency_hz", "k1", "exposure_min", "exposure_max",
-                                 "exposure_frequency_hz"});
+                                 "exposure_frequency_hz", "follow_subject", "follow_smoothing_s"});
     WildCameraConfig& w = c.wild;
     if (n["width"]) w.width = integer("width", 16, 8192);
     if (n["height"]) w.height = integer("height", 16, 8192);
@@ -162,6 +162,8 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
     if (n["exposure_min"]) w.exposure_min = num("exposure_min", 0.01, 10);
     if (n["exposure_max"]) w.exposure_max = num("exposure_max", 0.01, 10);
     if (n["exposure_frequency_hz"]) w.exposure_frequency_hz = num("exposure_frequency_hz", 0, 100);
+    if (n["follow_subject"]) w.follow_subject = y.get<bool>(n["follow_subject"], "cameras.follow_subject", "true or false");
+    if (n["follow_smoothing_s"]) w.follow_smoothing_s = num("follow_smoothing_s", 0, 100);
     if (w.exposure_min > w.exposure_max) y.fail_at(n, "cameras.exposure_min", "must not exceed exposure_max");
   }
 }
@@ -524,7 +526,9 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
   } else {
     WildCameraConfig wild = cfg.cameras.wild;
     wild.metres_per_unit = mpu;
-    std::vector<Camera> path = wild_camera_path(wild, frames, cfg.motion.fps, cfg.seed);
+    std::vector<Eigen::Vector3d> subject_track(frames);  // the body's vertex centroid, character units
+    for (int f = 0; f < frames; ++f) subject_track[f] = posed[f].body.colwise().mean().transpose();
+    std::vector<Camera> path = wild_camera_path(wild, frames, cfg.motion.fps, cfg.seed, subject_track);
     exposure = wild_exposure(wild, frames, cfg.motion.fps, cfg.seed);
     views.push_back("wild");
     for (int f = 0; f < frames; ++f) path[f].name = "wild_" + dataset_frame_name(f);

@@ -264,6 +264,67 @@ TEST(WildCamera, SubjectStaysInFrame) {
   for (const Camera& c : wild_camera_path(cfg, 30, 30, 1)) expect_in_frame(c, subject_box(1000), 0.02, "wild mm");
 }
 
+// A subject walking 3 m along x and 1 m along z over 4 s (and bobbing 5 cm up and down):
+// the camera keeps it in frame and aims at its smoothed ground position.
+TEST(WildCamera, FollowsAWalkingSubject) {
+  WildCameraConfig cfg;
+  const int frames = 120;
+  const double fps = 30;
+  std::vector<Eigen::Vector3d> root(frames);
+  for (int i = 0; i < frames; ++i) {
+    const double s = double(i) / (frames - 1);
+    root[i] = Eigen::Vector3d(3.0 * s, 0.95 + 0.05 * std::sin(12 * s), 1.0 * s);
+  }
+  const std::vector<Eigen::Vector3d> smooth = smooth_track(root, cfg.follow_smoothing_s * fps);
+  WildCameraConfig still = cfg;
+  still.shake_position_m = 0;
+  still.shake_rotation_deg = 0;
+  const auto steady = wild_camera_path(still, frames, fps, 4, root);
+  for (int i = 0; i < frames; ++i) {
+    Eigen::Vector3d aim = cfg.target_m + smooth[i] - smooth[0];
+    aim.y() = cfg.target_m.y();  // the subject's height does not move the aim
+    const Camera& c = steady[i];
+    EXPECT_LT((c.project(aim) - Eigen::Vector2d(c.K(0, 2), c.K(1, 2))).norm(), 1e-6) << "frame " << i;
+    EXPECT_NEAR(c.center().y(), cfg.height_m, 1e-9);
+  }
+  for (uint64_t seed = 0; seed < 3; ++seed) {
+    const auto path = wild_camera_path(cfg, frames, fps, seed, root);
+    for (int i = 0; i < frames; ++i) {
+      std::vector<Eigen::Vector3d> box = subject_box();
+      for (auto& p : box) p += Eigen::Vector3d(root[i].x(), 0, root[i].z());
+      expect_in_frame(path[i], box, 0.02, "walking, frame " + std::to_string(i));
+    }
+    // The same walk with a fixed aim loses the subject.
+    const auto fixed = wild_camera_path(cfg, frames, fps, seed);
+    const Eigen::Vector2d last = fixed.back().project(Eigen::Vector3d(root.back().x() + 0.55, 0, root.back().z()));
+    EXPECT_GT(last.x(), fixed.back().width) << "the fixed camera should have lost the subject (test premise)";
+  }
+  // follow_subject false: the track is ignored.
+  still.follow_subject = false;
+  const auto ignored = wild_camera_path(still, frames, fps, 4, root), plain = wild_camera_path(still, frames, fps, 4);
+  for (int i = 0; i < frames; ++i) EXPECT_EQ(ignored[i].t, plain[i].t);
+}
+
+TEST(WildCamera, TrackSmoothingKeepsLinesAndRemovesJitter) {
+  std::vector<Eigen::Vector3d> line(60), jitter(60);
+  for (int i = 0; i < 60; ++i) {
+    line[i] = Eigen::Vector3d(0.1 * i, 1.0, -0.05 * i);
+    jitter[i] = Eigen::Vector3d((i % 2 ? 0.02 : -0.02), 0, 0);
+  }
+  const auto smooth_line = smooth_track(line, 4.0), smooth_jitter = smooth_track(jitter, 4.0);
+  for (int i = 0; i < 60; ++i) {  // a steady motion, up to the ends, without lag
+    EXPECT_LT((smooth_line[i] - line[i]).norm(), 1e-9) << i;
+    EXPECT_LT(smooth_jitter[i].norm(), i >= 12 && i < 48 ? 2e-4 : 5e-3) << i;  // ±2 cm jitter
+  }
+  EXPECT_EQ(smooth_track(line, 0.0), line);
+  expect_error([&] { smooth_track(line, -1); }, {"sigma"});
+  WildCameraConfig cfg;
+  expect_error([&] { wild_camera_path(cfg, 10, 30, 1, std::vector<Eigen::Vector3d>(9)); }, {"track", "9", "10"});
+  std::vector<Eigen::Vector3d> bad(10, Eigen::Vector3d::Zero());
+  bad[3].x() = NAN;
+  expect_error([&] { wild_camera_path(cfg, 10, 30, 1, bad); }, {"track", "frame 3"});
+}
+
 TEST(WildCamera, ExposureStaysInRangeAndChangesSmoothly) {
   WildCameraConfig cfg;
   cfg.exposure_min = 0.5;
