@@ -8,7 +8,9 @@
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1),
-// precondition_exact_hessian (0/1).
+// precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_expansions;
+// and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
+// youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
 // exact)
 // Runs single-threaded; prints one line per frame and a median summary.
@@ -129,6 +131,13 @@ int main(int argc_all, char** argv_all) {
     else if (key == "cg_relative_tolerance") s.newton.cg_relative_tolerance = std::atof(value.c_str());
     else if (key == "precondition_exact_hessian")
       s.newton.precondition_exact_hessian = value != "0";
+    else if (key == "negative_curvature_search")
+      s.newton.negative_curvature_search = value != "0";
+    else if (key == "max_expansions") s.newton.max_expansions = std::atoi(value.c_str());
+    else if (key == "bending_stiffness") s.material.bending_stiffness = std::atof(value.c_str());
+    else if (key == "youngs_modulus") s.material.youngs_modulus = std::atof(value.c_str());
+    else if (key == "collision_stiffness") s.collision_stiffness = std::atof(value.c_str());
+    else if (key == "collision_thickness") s.collision_thickness = std::atof(value.c_str());
     else if (key == "start_from_prediction") s.start_from_prediction = value != "0";
     else {
       std::fprintf(stderr, "bench_cloth_sim: unknown option '%s'\n", key.c_str());

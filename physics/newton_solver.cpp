@@ -92,7 +92,10 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
     Eigen::VectorXd hp = H.multiply(p);
     hp += delta_ * p;
     const double php = p.dot(hp);
-    if (!(php > 0)) return CgOutcome::negative_curvature;
+    if (!(php > 0)) {
+      negative_direction_ = p;
+      return CgOutcome::negative_curvature;
+    }
     const double alpha = rz / php;
     d += alpha * p;
     r -= alpha * hp;
@@ -117,7 +120,8 @@ void NewtonSolver::exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
   // corrected H + δI. If the very first direction has non-positive curvature, the
   // preconditioned step (the corrected Newton direction) is used.
   const int before = report.cg_iterations;
-  preconditioned_cg(exact_hessian_, g, d, report);
+  last_cg_outcome_ = preconditioned_cg(exact_hessian_, g, d, report);
+  negative_curvature_seen_ = last_cg_outcome_ == CgOutcome::negative_curvature;
   if (report.cg_iterations == before) d = cholmod_->solve(-g);
 }
 
@@ -181,6 +185,92 @@ bool NewtonSolver::direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
   return ok;
 }
 
+double NewtonSolver::search_negative_curvature(const Eigen::VectorXd& g, double reach, Eigen::VectorXd& x_new,
+                                              double& e_new, Eigen::VectorXd& x_trial,
+                                              NewtonReport& report) const {
+  // CG stopped at a direction p of non-positive curvature of the exact Hessian (a buckling
+  // mode of the compressed membrane), so the accepted step left it out. The energy falls
+  // along p before the membrane stiffens again: from the accepted point, try p scaled to
+  // move a vertex as far as the accepted step did (reach, m), doubling while the energy
+  // keeps falling or halving until it falls, and keep the lowest energy found. Energy
+  // evaluations only; the step filter applies.
+  Eigen::VectorXd p = negative_direction_;
+  if (g.dot(p) > 0) p = -p;
+  const double p_max = p.lpNorm<Eigen::Infinity>();
+  if (!(p_max > 0) || !(reach > 0) || !p.allFinite()) return 0;
+  auto admissible = [&](double tau) {
+    double cap = 1.0;
+    for (const Energy* en : energies_) cap = std::min(cap, en->max_step(x_new, tau * p));
+    return cap;
+  };
+  double tau = reach / p_max;
+  tau *= admissible(tau);
+  double best_tau = 0, best_e = e_new;
+  for (int k = 0; k < 12 && tau > 0; ++k) {
+    x_trial = x_new + tau * p;
+    const double et = evaluate(x_trial, nullptr, nullptr, &report.energy_ms);
+    if (std::isfinite(et) && et < best_e) {
+      best_e = et;
+      best_tau = tau;
+      if (admissible(2.0 * tau) < 1.0) break;
+      tau *= 2.0;
+    } else if (best_tau > 0) {
+      break;
+    } else {
+      tau *= 0.5;
+    }
+  }
+  if (best_tau == 0) return 0;
+  x_new += best_tau * p;
+  e_new = best_e;
+  return best_tau * p_max;
+}
+
+void NewtonSolver::print_trace(int it, const Eigen::VectorXd& x, const Eigen::VectorXd& g, double e,
+                               const Eigen::VectorXd& x_new, const Eigen::VectorXd& d,
+                               double alpha, const IterationTrace& t,
+                               const NewtonReport& report) const {
+  // One line per accepted iteration (WEFT_NEWTON_TRACE): the energy decrease against the
+  // exact quadratic model's prediction for the step taken, the step filter's cap, the
+  // line search (back-tracks, doublings), CG (iterations and how it ended), and the vertex
+  // with the largest residual with each energy's share of the force there (relative to
+  // its force scale): where the out-of-balance force sits.
+  const Eigen::VectorXd step = x_new - x;
+  const SparseHessian& h = exact_differs_ ? exact_hessian_ : hessian_;
+  const double predicted = -(g.dot(step) + 0.5 * step.dot(h.multiply(step)));
+  const double actual = e - energy(x_new);
+  int worst = 0;
+  double worst_r = -1;
+  for (int i = 0; i < n_; ++i) {
+    const double r = g.segment<3>(3 * i).norm() * inv_force_scale_[i];
+    if (r > worst_r) {
+      worst_r = r;
+      worst = i;
+    }
+  }
+  std::string shares;
+  char buf[96];
+  for (const Energy* en : energies_) {
+    Eigen::VectorXd ge = Eigen::VectorXd::Zero(3 * n_);
+    en->evaluate(x, &ge, nullptr);
+    const double r = ge.segment<3>(3 * worst).norm() * inv_force_scale_[worst];
+    if (r < 1e-3 * worst_r) continue;
+    std::snprintf(buf, sizeof buf, " %s %.3g", en->name().c_str(), r);
+    shares += buf;
+  }
+  static const char* outcomes[] = {"converged", "negative_curvature", "too_slow"};
+  std::fprintf(stderr,
+               "it %d E %.12g res %.3e |d| %.2e filter %.3g alpha %g backtracks %d doublings %d "
+               "curvature_step %.2e decrease %.3e predicted %.3e ratio %.3f cg %d %s delta %.2e "
+               "fact %d corr %d worst v%d |dx| %.2e m:%s\n",
+               it, e, worst_r, d.lpNorm<Eigen::Infinity>(), t.filter, alpha, t.backtracks,
+               t.expansions, t.curvature_step, actual, predicted,
+               predicted != 0 ? actual / predicted : 0.0, report.cg_iterations - t.cg_before,
+               exact_differs_ ? outcomes[static_cast<int>(last_cg_outcome_)] : "none", delta_,
+               report.factorizations, report.corrections, worst, step.segment<3>(3 * worst).norm(),
+               shares.c_str());
+}
+
 NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
   WEFT_CHECK(x.size() == 3 * n_, "newton: x has ", x.size(), " entries, expected ", 3 * n_);
   const auto t_start = std::chrono::steady_clock::now();
@@ -199,11 +289,14 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
   };
   if (!std::isfinite(e) || !g.allFinite()) return finish(StepStatus::non_finite);
   report.accepted_energies.push_back(e);
+  const bool trace_on = std::getenv("WEFT_NEWTON_TRACE") != nullptr;
   for (int it = 0; it < options_.max_iterations; ++it) {
     if (residual(g) <= options_.tolerance) return finish(StepStatus::converged);
     evaluate(x, nullptr, &hessian_, &report.energy_ms);
     hessian_corrected_ = false;
     exact_differs_ = false;
+    negative_curvature_seen_ = false;
+    last_cg_outcome_ = CgOutcome::converged;
     if (delta_floor_ == 0) {
       // Regularisation starts from a tiny fraction of the Hessian's scale (N/m).
       double diag = 0;
@@ -213,13 +306,18 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     }
     bool accepted = false;
     double last_alpha = 0;
+    IterationTrace trace;
+    trace.cg_before = report.cg_iterations;
     for (int retry = 0; retry < 4 && !accepted; ++retry) {
       if (!direction(x, g, d, report)) break;
       const double slope = g.dot(d);
       double alpha = 1.0;
       for (const Energy* en : energies_) alpha = std::min(alpha, en->max_step(x, d));
+      trace.filter = alpha;
+      trace.backtracks = 0;
+      trace.expansions = 0;
       double e_accept = 0;
-      for (int b = 0; b < options_.max_backtracks; ++b, alpha *= 0.5) {
+      for (int b = 0; b < options_.max_backtracks; ++b, alpha *= 0.5, ++trace.backtracks) {
         x_new = x + alpha * d;
         const double e_new = evaluate(x_new, nullptr, nullptr, &report.energy_ms);
         if (std::isfinite(e_new) && e_new <= e + options_.armijo * alpha * slope) {
@@ -245,7 +343,13 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
           alpha = a2;
           e_accept = e2;
           x_new.swap(x_trial);
+          ++trace.expansions;
         }
+      }
+      if (accepted && options_.negative_curvature_search && negative_curvature_seen_) {
+        trace.curvature_step = search_negative_curvature(g, (alpha * d).lpNorm<Eigen::Infinity>(),
+                                                         x_new, e_accept, x_trial, report);
+        if (trace.curvature_step > 0) ++report.curvature_steps;
       }
       last_alpha = alpha;
       if (!accepted) {
@@ -255,11 +359,7 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
       }
     }
     if (!accepted) return finish(StepStatus::line_search_failed);
-    if (std::getenv("WEFT_NEWTON_TRACE"))
-      std::fprintf(stderr,
-                   "it %d E %.12g |g| %.3e res %.3e |d| %.3e delta %.2e fact %d corr %d alpha %g\n",
-                   it, e, g.lpNorm<Eigen::Infinity>(), residual(g), d.lpNorm<Eigen::Infinity>(),
-                   delta_, report.factorizations, report.corrections, last_alpha);
+    if (trace_on) print_trace(it, x, g, e, x_new, d, last_alpha, trace, report);
     const double e_new = evaluate(x_new, &g_new, nullptr, &report.energy_ms);
     if (!std::isfinite(e_new) || !g_new.allFinite()) return finish(StepStatus::non_finite);
     x.swap(x_new);

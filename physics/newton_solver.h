@@ -6,7 +6,8 @@
 // curvature), then adaptive regularisation H + δI (δ grows when
 // the factorisation fails, the direction is not a descent direction or the line search
 // fails, and shrinks after a success); a step filter (Energy::max_step), an Armijo
-// back-tracking line search and doubling of accepted full steps. Converged when every
+// back-tracking line search and doubling of accepted full steps, then a search along CG's
+// direction of negative curvature when it met one. Converged when every
 // vertex's residual is below the tolerance relative to its force scale. The solver never
 // leaves x non-finite: a failed iteration keeps the last accepted iterate, which has the
 // lowest energy reached.
@@ -54,6 +55,9 @@ struct NewtonOptions {
   bool precondition_exact_hessian = true;
   int cg_max_iterations = 25;
   double cg_relative_tolerance = 1e-4;  // of the residual relative to ‖∇E‖
+  // direct: when CG stopped at non-positive curvature, also search along that direction
+  // from the accepted point (energy evaluations only; see search_negative_curvature).
+  bool negative_curvature_search = true;
 };
 
 struct NewtonReport {
@@ -65,6 +69,7 @@ struct NewtonReport {
   int factorizations = 0;
   int corrections = 0;        // iterations that fell back to PSD-projected element Hessians
   int cg_iterations = 0;
+  int curvature_steps = 0;    // iterations that also moved along negative curvature
   double regularization = 0;  // δ after the step, N/m
   std::vector<double> accepted_energies;  // E after each accepted iteration (first: start)
   // Wall time split, milliseconds: energies' evaluate (by energy, values and derivatives),
@@ -109,6 +114,20 @@ class NewtonSolver {
   // Adds the energies' PSD corrections to the current Hessian (once per assembly); false
   // if it was corrected already or no energy has a correction.
   bool correct_hessian(const Eigen::VectorXd& x, NewtonReport& report);
+  // Moves x_new (energy e_new) along CG's direction of non-positive curvature if the
+  // energy falls there; returns the largest vertex move it added (m; 0 if none).
+  double search_negative_curvature(const Eigen::VectorXd& g, double reach,
+                                   Eigen::VectorXd& x_new, double& e_new, Eigen::VectorXd& x_trial,
+                                   NewtonReport& report) const;
+  struct IterationTrace {
+    double filter = 1.0;       // the step filter's cap on α
+    int backtracks = 0, expansions = 0;
+    double curvature_step = 0;  // m, from search_negative_curvature
+    int cg_before = 0;
+  };
+  void print_trace(int it, const Eigen::VectorXd& x, const Eigen::VectorXd& g, double e,
+                   const Eigen::VectorXd& x_new, const Eigen::VectorXd& d, double alpha,
+                   const IterationTrace& t, const NewtonReport& report) const;
 
   int n_;
   std::vector<Energy*> energies_;
@@ -122,6 +141,9 @@ class NewtonSolver {
   bool hessian_corrected_ = false;  // hessian_ holds the corrections of this iteration
   SparseHessian exact_hessian_;     // the uncorrected Hessian of this iteration
   bool exact_differs_ = false;      // the corrections changed hessian_ from exact_hessian_
+  CgOutcome last_cg_outcome_ = CgOutcome::converged;  // of this iteration's exact_direction
+  bool negative_curvature_seen_ = false;  // exact_direction stopped at non-positive curvature
+  Eigen::VectorXd negative_direction_;   // CG's direction of non-positive curvature
 };
 
 }  // namespace weft::physics

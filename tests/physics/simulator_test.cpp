@@ -69,6 +69,33 @@ TEST(Simulator, CompressedClothNeedsOneFactorisationPerNewtonIteration) {
   }
 }
 
+TEST(Simulator, BucklingClothAlsoStepsAlongNegativeCurvature) {
+  // The squeezed cloth of the test above buckles: CG meets directions of negative
+  // curvature of the exact Hessian. With the search on, some iterations also move along
+  // them; the step still converges and no accepted iterate raises the energy.
+  const int n = 10;
+  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, n, n, "xz", 0.2);
+  Positions squeezed = mesh.rest;
+  for (int i = 0; i < mesh.num_vertices(); ++i) {
+    squeezed[3 * i] *= 0.9;
+    squeezed[3 * i + 1] += 0.002 * std::sin(12.0 * mesh.rest[3 * i]);
+  }
+  for (bool search : {true, false}) {
+    SimulationSettings s = settings(1.0 / 60);
+    s.gravity.setZero();
+    s.newton.negative_curvature_search = search;
+    ClothSimulator sim(mesh, s);
+    const StepResult r = sim.step(squeezed, squeezed);
+    ASSERT_EQ(r.status, StepStatus::converged) << "search " << search;
+    for (size_t k = 1; k < r.last.accepted_energies.size(); ++k)
+      EXPECT_LE(r.last.accepted_energies[k], r.last.accepted_energies[k - 1]) << "search " << search;
+    if (search)
+      EXPECT_GT(r.last.curvature_steps, 0);
+    else
+      EXPECT_EQ(r.last.curvature_steps, 0);
+  }
+}
+
 TEST(Simulator, HangingClothSettlesToEquilibrium) {
   // Long time steps: implicit Euler's numerical damping settles the swing in few frames.
   const int n = 8;
