@@ -133,6 +133,8 @@ int main(int argc_all, char** argv_all) {
       s.newton.precondition_exact_hessian = value != "0";
     else if (key == "negative_curvature_search")
       s.newton.negative_curvature_search = value != "0";
+    else if (key == "chord_steps") s.newton.chord_steps = std::atoi(value.c_str());
+    else if (key == "chord_progress") s.newton.chord_progress = std::atof(value.c_str());
     else if (key == "max_expansions") s.newton.max_expansions = std::atoi(value.c_str());
     else if (key == "bending_stiffness") s.material.bending_stiffness = std::atof(value.c_str());
     else if (key == "youngs_modulus") s.material.youngs_modulus = std::atof(value.c_str());
@@ -169,7 +171,7 @@ int main(int argc_all, char** argv_all) {
   std::vector<double> frame_ms, frame_cpu_ms, iters;
   double lin = 0, coll = 0, energy = 0, total = 0;
   int failed = 0;
-  long factorizations = 0, cg_iterations = 0;
+  long factorizations = 0, cg_iterations = 0, chord_steps = 0;
   for (int f = 0; f < frames; ++f) {
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = cpu_ms();
@@ -189,6 +191,7 @@ int main(int argc_all, char** argv_all) {
       it += r.iterations;
       factorizations += r.factorizations;
       cg_iterations += r.cg_iterations;
+      chord_steps += r.chord_steps;
       failed += r.status != StepStatus::converged;
       lin += r.linear_solve_ms;
       coll += r.energy_ms.back();  // the collision energy is last
@@ -211,10 +214,10 @@ int main(int argc_all, char** argv_all) {
   std::printf(
       "SUMMARY scene=%s solver=%s vertices=%d median_frame_ms=%.1f median_frame_cpu_ms=%.1f "
       "median_newton_per_frame=%.0f mean_newton_per_frame=%.1f "
-      "factorizations_per_frame=%.1f cg_per_frame=%.1f "
+      "factorizations_per_frame=%.1f cg_per_frame=%.1f chord_steps_per_frame=%.1f "
       "linear_solve=%.0f%% collision=%.0f%% energies_assembly=%.0f%% non_converged_steps=%d\n",
       scene.c_str(), solver.c_str(), mesh.num_vertices(), median(frame_ms), median(frame_cpu_ms),
-      median(iters), mean_it, double(factorizations) / frames, double(cg_iterations) / frames,
+      median(iters), mean_it, double(factorizations) / frames, double(cg_iterations) / frames, double(chord_steps) / frames,
       100 * lin / total, 100 * coll / total, 100 * energy / total, failed);
   return 0;
 }

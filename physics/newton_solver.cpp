@@ -367,6 +367,34 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     e = e_new;
     report.accepted_energies.push_back(e);
     report.iterations = it + 1;
+    // Chord steps: further descent steps with this iteration's factor, d = −M⁻¹∇E (a solve,
+    // no factorisation), while they keep lowering the energy and the residual.
+    for (int k = 0; k < options_.chord_steps && cholmod_->has_factor(); ++k) {
+      const double r0 = residual(g);
+      if (r0 <= options_.tolerance) break;
+      d = cholmod_->solve(-g);
+      const double slope = g.dot(d);
+      if (!d.allFinite() || !(slope < 0)) break;
+      double alpha = 1.0;
+      for (const Energy* en : energies_) alpha = std::min(alpha, en->max_step(x, d));
+      bool ok = false;
+      double e_c = 0;
+      for (int b = 0; b < 6 && !ok; ++b, alpha *= 0.5) {
+        x_new = x + alpha * d;
+        e_c = evaluate(x_new, nullptr, nullptr, &report.energy_ms);
+        ok = std::isfinite(e_c) && e_c <= e + options_.armijo * alpha * slope;
+      }
+      if (!ok) break;
+      e_c = evaluate(x_new, &g_new, nullptr, &report.energy_ms);
+      if (!std::isfinite(e_c) || !g_new.allFinite()) break;
+      const double r1 = residual(g_new);
+      x.swap(x_new);
+      g.swap(g_new);
+      e = e_c;
+      report.accepted_energies.push_back(e);
+      ++report.chord_steps;
+      if (!(r1 < options_.chord_progress * r0)) break;
+    }
     delta_ = delta_ <= delta_floor_ ? 0.0 : 0.1 * delta_;
   }
   if (residual(g) <= options_.tolerance) return finish(StepStatus::converged);
