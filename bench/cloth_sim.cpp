@@ -8,7 +8,8 @@
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1),
-// precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_expansions;
+// precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_expansions,
+// chord_steps, chord_progress;
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
 // youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
