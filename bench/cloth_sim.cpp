@@ -9,7 +9,8 @@
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_expansions,
-// chord_steps, chord_progress;
+// chord_steps, chord_progress, max_iterations (per step; 1 = one linear solve per step, as
+// a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
 // youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
@@ -137,6 +138,7 @@ int main(int argc_all, char** argv_all) {
     else if (key == "chord_steps") s.newton.chord_steps = std::atoi(value.c_str());
     else if (key == "chord_progress") s.newton.chord_progress = std::atof(value.c_str());
     else if (key == "max_expansions") s.newton.max_expansions = std::atoi(value.c_str());
+    else if (key == "max_iterations") s.newton.max_iterations = std::atoi(value.c_str());
     else if (key == "bending_stiffness") s.material.bending_stiffness = std::atof(value.c_str());
     else if (key == "youngs_modulus") s.material.youngs_modulus = std::atof(value.c_str());
     else if (key == "collision_stiffness") s.collision_stiffness = std::atof(value.c_str());
@@ -169,7 +171,7 @@ int main(int argc_all, char** argv_all) {
               sim.solver().cholmod().supernodal() ? "supernodal" : "simplicial",
               sim.solver().cholmod().factor_nonzeros(), sim.solver().cholmod().factor_flops());
   Positions x = mesh.rest, v = Positions::Zero(x.size());
-  std::vector<double> frame_ms, frame_cpu_ms, iters;
+  std::vector<double> frame_ms, frame_cpu_ms, iters, residuals;
   double lin = 0, coll = 0, energy = 0, total = 0;
   int failed = 0;
   long factorizations = 0, cg_iterations = 0, chord_steps = 0;
@@ -177,6 +179,7 @@ int main(int argc_all, char** argv_all) {
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = cpu_ms();
     int it = 0;
+    double residual = 0;  // the steps' worst max_i ‖∇_i E‖ / (m_i g): out of balance
     for (int sub = 0; sub < 2; ++sub) {
       if (skirt) {
         const double t = (2 * f + sub + 1) * s.time_step;
@@ -190,6 +193,7 @@ int main(int argc_all, char** argv_all) {
       }
       const NewtonReport r = sim.advance(x, v, s.time_step);
       it += r.iterations;
+      residual = std::max(residual, r.residual);
       factorizations += r.factorizations;
       cg_iterations += r.cg_iterations;
       chord_steps += r.chord_steps;
@@ -202,8 +206,14 @@ int main(int argc_all, char** argv_all) {
     frame_ms.push_back(ms_since(t0));
     frame_cpu_ms.push_back(cpu_ms() - c0);
     iters.push_back(it);
-    std::printf("frame %d: %.1f ms (cpu %.1f ms), %d Newton iterations\n", f + 1,
-                frame_ms.back(), frame_cpu_ms.back(), it);
+    residuals.push_back(residual);
+    double depth_mm = 0;  // drape: the deepest vertex inside the sphere
+    if (!skirt)
+      for (Eigen::Index i = 0; i < x.size() / 3; ++i)
+        depth_mm = std::max(depth_mm, 1e3 * (0.3 - (x.segment<3>(3 * i) - Vec3(0, 0.4, 0)).norm()));
+    std::printf("frame %d: %.1f ms (cpu %.1f ms), %d Newton iterations, residual %.2g of weight%s\n", f + 1,
+                frame_ms.back(), frame_cpu_ms.back(), it, residual,
+                skirt ? "" : (", penetration " + std::to_string(depth_mm) + " mm").c_str());
     std::fflush(stdout);
   }
   auto median = [](std::vector<double> v) {
@@ -216,9 +226,11 @@ int main(int argc_all, char** argv_all) {
       "SUMMARY scene=%s solver=%s vertices=%d median_frame_ms=%.1f median_frame_cpu_ms=%.1f "
       "median_newton_per_frame=%.0f mean_newton_per_frame=%.1f "
       "factorizations_per_frame=%.1f cg_per_frame=%.1f chord_steps_per_frame=%.1f "
-      "linear_solve=%.0f%% collision=%.0f%% energies_assembly=%.0f%% non_converged_steps=%d\n",
+      "linear_solve=%.0f%% collision=%.0f%% energies_assembly=%.0f%% non_converged_steps=%d "
+      "median_residual=%.2g max_residual=%.2g\n",
       scene.c_str(), solver.c_str(), mesh.num_vertices(), median(frame_ms), median(frame_cpu_ms),
       median(iters), mean_it, double(factorizations) / frames, double(cg_iterations) / frames, double(chord_steps) / frames,
-      100 * lin / total, 100 * coll / total, 100 * energy / total, failed);
+      100 * lin / total, 100 * coll / total, 100 * energy / total, failed, median(residuals),
+      *std::max_element(residuals.begin(), residuals.end()));
   return 0;
 }
