@@ -28,9 +28,9 @@ std::string python() {
 // weft's errors may be at most PyTorch float32's (issue 4). Measured worst per-tensor
 // ratios over seeds 0-4: ResNet-18 training 0.92, ResNet-50 eval 0.76 besides one
 // tie-moved gradient (median 0.57 and 0.47), since products sum their depth in short
-// chains (ops/depth_blocked_gemm.h;
-// docs/BENCHMARKS.md, accuracy against PyTorch). Gradients moved by a ReLU/max-pool tie
-// that flips in one float32 run only are excused by the script (below 2e-2, reported).
+// chains (ops/depth_blocked_gemm.h; docs/BENCHMARKS.md, accuracy against PyTorch).
+// Gradients moved by a ReLU/max-pool tie that flips in one float32 run only are excused
+// by the script (below 2e-2, reported).
 constexpr const char* kTolerance = "1.0";
 
 void run_parity(const std::string& args) {
