@@ -114,6 +114,32 @@ Eigen::Vector3d vec3(const StrictYaml& y, const YAML::Node& n, const std::string
   return {y.number(n[0], key), y.number(n[1], key), y.number(n[2], key)};
 }
 
+// A config section's numeric keys: each names its field and its allowed range.
+struct NumberKey {
+  const char* key;
+  double* value;
+  double lo, hi;
+};
+struct IntegerKey {
+  const char* key;
+  int* value;
+  double lo, hi;
+};
+
+// Checks that `n` holds only these keys (and `other_keys`, parsed by the caller) and reads
+// the numbers that are present into their fields.
+void parse_number_keys(const StrictYaml& y, const YAML::Node& n, const std::string& where,
+                       const std::vector<NumberKey>& numbers, const std::vector<IntegerKey>& integers,
+                       std::vector<const char*> other_keys) {
+  for (const NumberKey& k : numbers) other_keys.push_back(k.key);
+  for (const IntegerKey& k : integers) other_keys.push_back(k.key);
+  y.check_keys(n, where, other_keys);
+  for (const NumberKey& k : numbers)
+    if (n[k.key]) *k.value = y.number(n[k.key], where + k.key, k.lo, k.hi);
+  for (const IntegerKey& k : integers)
+    if (n[k.key]) *k.value = static_cast<int>(y.number(n[k.key], where + k.key, k.lo, k.hi));
+}
+
 void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraConfig& c) {
   if (n["rig"]) {
     const std::string r = y.get<std::string>(n["rig"], "cameras.rig", "studio or wild");
@@ -121,66 +147,54 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
     else if (r == "wild") c.kind = CameraRigKind::wild;
     else y.fail_at(n["rig"], "cameras.rig", "expected studio or wild, found '" + r + "'");
   }
-  auto integer = [&](const char* key, double lo, double hi) {
-    return static_cast<int>(y.number(n[key], std::string("cameras.") + key, lo, hi));
-  };
-  auto num = [&](const char* key, double lo, double hi) { return y.number(n[key], std::string("cameras.") + key, lo, hi); };
   if (c.kind == CameraRigKind::studio) {
-    y.check_keys(n, "cameras.", {"rig", "views", "width", "height", "vertical_fov_deg", "radius_m", "height_m",
-                                 "target_m", "first_azimuth_deg", "rings", "ring_spacing_m", "k1"});
     StudioRigConfig& s = c.studio;
-    if (n["views"]) s.views = integer("views", 1, 72);
-    if (n["width"]) s.width = integer("width", 16, 8192);
-    if (n["height"]) s.height = integer("height", 16, 8192);
-    if (n["vertical_fov_deg"]) s.vertical_fov_deg = num("vertical_fov_deg", 1, 170);
-    if (n["radius_m"]) s.radius_m = num("radius_m", 0.1, 100);
-    if (n["height_m"]) s.height_m = num("height_m", -100, 100);
+    parse_number_keys(y, n, "cameras.",
+                      {{"vertical_fov_deg", &s.vertical_fov_deg, 1, 170},
+                       {"radius_m", &s.radius_m, 0.1, 100},
+                       {"height_m", &s.height_m, -100, 100},
+                       {"first_azimuth_deg", &s.first_azimuth_deg, -360, 360},
+                       {"ring_spacing_m", &s.ring_spacing_m, 0, 100},
+                       {"k1", &s.k1, -1, 1}},
+                      {{"views", &s.views, 1, 72}, {"width", &s.width, 16, 8192}, {"height", &s.height, 16, 8192},
+                       {"rings", &s.rings, 0, 72}},
+                      {"rig", "target_m"});
     if (n["target_m"]) s.target_m = vec3(y, n["target_m"], "cameras.target_m");
-    if (n["first_azimuth_deg"]) s.first_azimuth_deg = num("first_azimuth_deg", -360, 360);
-    if (n["rings"]) s.rings = integer("rings", 0, 72);
-    if (n["ring_spacing_m"]) s.ring_spacing_m = num("ring_spacing_m", 0, 100);
-    if (n["k1"]) s.k1 = num("k1", -1, 1);
   } else {
-    y.check_keys(n, "cameras.", {"rig", "width", "height", "vertical_fov_deg", "radius_start_m", "radius_end_m",
-                                 "height_m", "target_m", "start_azimuth_deg", "arc_deg", "shake_position_m",
-                                 "shake_rotation_deg", "shake_frequency_hz", "k1", "exposure_min", "exposure_max",
-                                 "exposure_frequency_hz", "follow_subject", "follow_smoothing_s"});
     WildCameraConfig& w = c.wild;
-    if (n["width"]) w.width = integer("width", 16, 8192);
-    if (n["height"]) w.height = integer("height", 16, 8192);
-    if (n["vertical_fov_deg"]) w.vertical_fov_deg = num("vertical_fov_deg", 1, 170);
-    if (n["radius_start_m"]) w.radius_start_m = num("radius_start_m", 0.1, 100);
-    if (n["radius_end_m"]) w.radius_end_m = num("radius_end_m", 0.1, 100);
-    if (n["height_m"]) w.height_m = num("height_m", -100, 100);
+    parse_number_keys(y, n, "cameras.",
+                      {{"vertical_fov_deg", &w.vertical_fov_deg, 1, 170},
+                       {"radius_start_m", &w.radius_start_m, 0.1, 100},
+                       {"radius_end_m", &w.radius_end_m, 0.1, 100},
+                       {"height_m", &w.height_m, -100, 100},
+                       {"start_azimuth_deg", &w.start_azimuth_deg, -360, 360},
+                       {"arc_deg", &w.arc_deg, -720, 720},
+                       {"shake_position_m", &w.shake_position_m, 0, 1},
+                       {"shake_rotation_deg", &w.shake_rotation_deg, 0, 30},
+                       {"shake_frequency_hz", &w.shake_frequency_hz, 0, 100},
+                       {"k1", &w.k1, -1, 1},
+                       {"exposure_min", &w.exposure_min, 0.01, 10},
+                       {"exposure_max", &w.exposure_max, 0.01, 10},
+                       {"exposure_frequency_hz", &w.exposure_frequency_hz, 0, 100},
+                       {"follow_smoothing_s", &w.follow_smoothing_s, 0, 100}},
+                      {{"width", &w.width, 16, 8192}, {"height", &w.height, 16, 8192}},
+                      {"rig", "target_m", "follow_subject"});
     if (n["target_m"]) w.target_m = vec3(y, n["target_m"], "cameras.target_m");
-    if (n["start_azimuth_deg"]) w.start_azimuth_deg = num("start_azimuth_deg", -360, 360);
-    if (n["arc_deg"]) w.arc_deg = num("arc_deg", -720, 720);
-    if (n["shake_position_m"]) w.shake_position_m = num("shake_position_m", 0, 1);
-    if (n["shake_rotation_deg"]) w.shake_rotation_deg = num("shake_rotation_deg", 0, 30);
-    if (n["shake_frequency_hz"]) w.shake_frequency_hz = num("shake_frequency_hz", 0, 100);
-    if (n["k1"]) w.k1 = num("k1", -1, 1);
-    if (n["exposure_min"]) w.exposure_min = num("exposure_min", 0.01, 10);
-    if (n["exposure_max"]) w.exposure_max = num("exposure_max", 0.01, 10);
-    if (n["exposure_frequency_hz"]) w.exposure_frequency_hz = num("exposure_frequency_hz", 0, 100);
     if (n["follow_subject"]) w.follow_subject = y.get<bool>(n["follow_subject"], "cameras.follow_subject", "true or false");
-    if (n["follow_smoothing_s"]) w.follow_smoothing_s = num("follow_smoothing_s", 0, 100);
     if (w.exposure_min > w.exposure_max) y.fail_at(n, "cameras.exposure_min", "must not exceed exposure_max");
   }
 }
 
 void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& n, KeypointNoiseConfig& k) {
-  y.check_keys(n, "keypoints.", {"noise_px", "dropout", "occluded_dropout", "visible_confidence",
-                                 "occluded_confidence", "confidence_jitter", "depth_tolerance_m"});
-  auto num = [&](const char* key, double lo, double hi) {
-    return y.number(n[key], std::string("keypoints.") + key, lo, hi);
-  };
-  if (n["noise_px"]) k.noise_px = num("noise_px", 0, 1000);
-  if (n["dropout"]) k.dropout = num("dropout", 0, 1);
-  if (n["occluded_dropout"]) k.occluded_dropout = num("occluded_dropout", 0, 1);
-  if (n["visible_confidence"]) k.visible_confidence = num("visible_confidence", 0, 1);
-  if (n["occluded_confidence"]) k.occluded_confidence = num("occluded_confidence", 0, 1);
-  if (n["confidence_jitter"]) k.confidence_jitter = num("confidence_jitter", 0, 1);
-  if (n["depth_tolerance_m"]) k.depth_tolerance_m = num("depth_tolerance_m", 0, 10);
+  parse_number_keys(y, n, "keypoints.",
+                    {{"noise_px", &k.noise_px, 0, 1000},
+                     {"dropout", &k.dropout, 0, 1},
+                     {"occluded_dropout", &k.occluded_dropout, 0, 1},
+                     {"visible_confidence", &k.visible_confidence, 0, 1},
+                     {"occluded_confidence", &k.occluded_confidence, 0, 1},
+                     {"confidence_jitter", &k.confidence_jitter, 0, 1},
+                     {"depth_tolerance_m", &k.depth_tolerance_m, 0, 10}},
+                    {}, {});
   validate_keypoint_noise(k, y.file + ": keypoints");
 }
 
