@@ -1,6 +1,7 @@
 #include "capture/strict_yaml.h"
 
 #include <algorithm>
+#include <sstream>
 
 namespace weft::capture {
 
@@ -18,8 +19,9 @@ void StrictYaml::check_keys(const YAML::Node& map, const std::string& where,
     if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; })) {
       std::string list;
       for (const char* k : known) list += std::string(list.empty() ? "" : ", ") + k;
-      fail_at(kv.first, where.empty() ? key : where + "." + key,
-              "unknown key (expected one of: " + list + ")");
+      // `where` is a section ("body") or a key prefix ending in a dot ("cameras.").
+      const std::string full = where.empty() || where.back() == '.' ? where + key : where + "." + key;
+      fail_at(kv.first, full, "unknown key (expected one of: " + list + ")");
     }
   }
 }
@@ -33,10 +35,11 @@ double StrictYaml::number(const YAML::Node& node, const std::string& key) const 
 double StrictYaml::number(const YAML::Node& node, const std::string& key, double lo,
                           double hi) const {
   const double v = number(node, key);
-  if (v < lo || v > hi)
-    fail_at(node, key,
-            "expected a number in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                "], found " + node.Scalar());
+  if (v < lo || v > hi) {
+    std::ostringstream range;  // shortest form: [0.01, 1e+06], not [0.010000, 1000000.000000]
+    range << "[" << lo << ", " << hi << "]";
+    fail_at(node, key, "expected a number in " + range.str() + ", found " + node.Scalar());
+  }
   return v;
 }
 

@@ -64,6 +64,11 @@ TEST(SynthConfig, ErrorsNameTheFileAndKey) {
   expect_error([] { parse_synth_config(base("simulation: {material: {poisson_ratio: 0.5}}\n"), "bad.yaml"); },
                {"bad.yaml", "poisson_ratio"});
   expect_error([] { parse_synth_config(base("keypoints: {dropout: 1.5}\n"), "bad.yaml"); }, {"keypoints.dropout"});
+  // The message names the key once and the range as written: "cameras.arcdeg", "[0, 1]".
+  expect_error([] { parse_synth_config(base("cameras: {rig: wild, arcdeg: 60}\n"), "bad.yaml"); },
+               {"bad.yaml", " cameras.arcdeg: unknown key", "arc_deg"});
+  expect_error([] { parse_synth_config(base("keypoints: {dropout: 1.5}\n"), "bad.yaml"); },
+               {"keypoints.dropout: expected a number in [0, 1], found 1.5"});
   expect_error([] { parse_synth_config(base("render: {background: blue}\n"), "bad.yaml"); }, {"render.background"});
   expect_error([] { parse_synth_config(base("splits: {val: 0.6, test: 0.6}\n"), "bad.yaml"); }, {"splits"});
   expect_error([] { parse_synth_config(base("", "  bvh: /nonexistent/clip.bvh\n"), "bad.yaml"); }, {"motion"});
