@@ -33,6 +33,10 @@ using namespace weft::physics;
 
 namespace {
 
+// The drape's obstacle (ARCSim's comparison scene), metres.
+const Vec3 kDrapeSphereCentre(0, 0.4, 0);
+constexpr double kDrapeSphereRadius = 0.3;
+
 // A closed cylinder (capped) of radius r from y0 to y1 around the y axis.
 BodyMesh cylinder_body(double r, double y0, double y1, int rings, int segments) {
   std::vector<Eigen::Vector3d> v;
@@ -163,7 +167,7 @@ int main(int argc_all, char** argv_all) {
     for (int j = 0; j < n; ++j) ring.push_back(j);
     sim.set_pins(ring);
   } else {
-    sim.set_spheres({{Vec3(0, 0.4, 0), 0.3}});
+    sim.set_spheres({{kDrapeSphereCentre, kDrapeSphereRadius}});
   }
   std::printf("scene %s solver %s vertices %d triangles %zu frames %d\n", scene.c_str(),
               solver.c_str(), mesh.num_vertices(), mesh.triangles.size(), frames);
@@ -210,7 +214,7 @@ int main(int argc_all, char** argv_all) {
     double depth_mm = 0;  // drape: the deepest vertex inside the sphere
     if (!skirt)
       for (Eigen::Index i = 0; i < x.size() / 3; ++i)
-        depth_mm = std::max(depth_mm, 1e3 * (0.3 - (x.segment<3>(3 * i) - Vec3(0, 0.4, 0)).norm()));
+        depth_mm = std::max(depth_mm, 1e3 * (kDrapeSphereRadius - (x.segment<3>(3 * i) - kDrapeSphereCentre).norm()));
     std::printf("frame %d: %.1f ms (cpu %.1f ms), %d Newton iterations, residual %.2g of weight%s\n", f + 1,
                 frame_ms.back(), frame_cpu_ms.back(), it, residual,
                 skirt ? "" : (", penetration " + std::to_string(depth_mm) + " mm").c_str());

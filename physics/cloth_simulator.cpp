@@ -92,8 +92,7 @@ NewtonReport ClothSimulator::advance(Positions& x, Positions& v, double h) {
   Positions x_new = x_start;
   if (settings_.start_from_prediction) {
     const Positions dx = x_hat - x_start;
-    double alpha = 1.0;
-    for (const Energy* e : solver_->energies()) alpha = std::min(alpha, e->max_step(x_start, dx));
+    const double alpha = solver_->max_step(x_start, dx);
     if (alpha > 0 && std::isfinite(alpha)) x_new += alpha * dx;
   }
   NewtonReport report = solver_->minimize(x_new);

@@ -109,11 +109,6 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
   return CgOutcome::too_slow;
 }
 
-NewtonSolver::CgOutcome NewtonSolver::cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
-                                                   NewtonReport& report) {
-  return preconditioned_cg(hessian_, g, d, report);
-}
-
 void NewtonSolver::exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
                                    NewtonReport& report) {
   // Truncated CG on the exact (H_exact + δI) d = −g, preconditioned by the factor of the
@@ -121,7 +116,6 @@ void NewtonSolver::exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
   // preconditioned step (the corrected Newton direction) is used.
   const int before = report.cg_iterations;
   last_cg_outcome_ = preconditioned_cg(exact_hessian_, g, d, report);
-  negative_curvature_seen_ = last_cg_outcome_ == CgOutcome::negative_curvature;
   if (report.cg_iterations == before) d = cholmod_->solve(-g);
 }
 
@@ -141,7 +135,7 @@ bool NewtonSolver::direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
   const bool reuse = options_.linear_solver == LinearSolverKind::reused_factor;
   for (int attempt = 0; attempt < 40 && !ok; ++attempt) {
     if (reuse && !factor_stale_ && cholmod_->has_factor()) {
-      const CgOutcome cg = cg_direction(g, d, report);
+      const CgOutcome cg = preconditioned_cg(hessian_, g, d, report);
       if (cg == CgOutcome::converged && g.dot(d) < 0 && d.allFinite()) {
         ok = true;
         break;
@@ -185,6 +179,12 @@ bool NewtonSolver::direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
   return ok;
 }
 
+double NewtonSolver::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  double alpha = 1.0;
+  for (const Energy* en : energies_) alpha = std::min(alpha, en->max_step(x, dx));
+  return alpha;
+}
+
 double NewtonSolver::search_negative_curvature(const Eigen::VectorXd& g, double reach, Eigen::VectorXd& x_new,
                                               double& e_new, Eigen::VectorXd& x_trial,
                                               NewtonReport& report) const {
@@ -198,11 +198,7 @@ double NewtonSolver::search_negative_curvature(const Eigen::VectorXd& g, double 
   if (g.dot(p) > 0) p = -p;
   const double p_max = p.lpNorm<Eigen::Infinity>();
   if (!(p_max > 0) || !(reach > 0) || !p.allFinite()) return 0;
-  auto admissible = [&](double tau) {
-    double cap = 1.0;
-    for (const Energy* en : energies_) cap = std::min(cap, en->max_step(x_new, tau * p));
-    return cap;
-  };
+  auto admissible = [&](double tau) { return max_step(x_new, tau * p); };
   double tau = reach / p_max;
   tau *= admissible(tau);
   double best_tau = 0, best_e = e_new;
@@ -295,7 +291,6 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     evaluate(x, nullptr, &hessian_, &report.energy_ms);
     hessian_corrected_ = false;
     exact_differs_ = false;
-    negative_curvature_seen_ = false;
     last_cg_outcome_ = CgOutcome::converged;
     if (delta_floor_ == 0) {
       // Regularisation starts from a tiny fraction of the Hessian's scale (N/m).
@@ -311,8 +306,7 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     for (int retry = 0; retry < 4 && !accepted; ++retry) {
       if (!direction(x, g, d, report)) break;
       const double slope = g.dot(d);
-      double alpha = 1.0;
-      for (const Energy* en : energies_) alpha = std::min(alpha, en->max_step(x, d));
+      double alpha = max_step(x, d);
       trace.filter = alpha;
       trace.backtracks = 0;
       trace.expansions = 0;
@@ -334,9 +328,7 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
         // Energy evaluations are cheap next to a factorisation.
         for (int k = 0; k < options_.max_expansions; ++k) {
           const double a2 = 2.0 * alpha;
-          double cap = 1.0;
-          for (const Energy* en : energies_) cap = std::min(cap, en->max_step(x, a2 * d));
-          if (cap < 1.0) break;
+          if (max_step(x, a2 * d) < 1.0) break;
           x_trial = x + a2 * d;
           const double e2 = evaluate(x_trial, nullptr, nullptr, &report.energy_ms);
           if (!(std::isfinite(e2) && e2 < e_accept && e2 <= e + options_.armijo * a2 * slope)) break;
@@ -346,7 +338,8 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
           ++trace.expansions;
         }
       }
-      if (accepted && options_.negative_curvature_search && negative_curvature_seen_) {
+      if (accepted && options_.negative_curvature_search &&
+          last_cg_outcome_ == CgOutcome::negative_curvature) {
         trace.curvature_step = search_negative_curvature(g, (alpha * d).lpNorm<Eigen::Infinity>(),
                                                          x_new, e_accept, x_trial, report);
         if (trace.curvature_step > 0) ++report.curvature_steps;
@@ -375,8 +368,7 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
       d = cholmod_->solve(-g);
       const double slope = g.dot(d);
       if (!d.allFinite() || !(slope < 0)) break;
-      double alpha = 1.0;
-      for (const Energy* en : energies_) alpha = std::min(alpha, en->max_step(x, d));
+      double alpha = max_step(x, d);
       bool ok = false;
       double e_c = 0;
       for (int b = 0; b < 6 && !ok; ++b, alpha *= 0.5) {

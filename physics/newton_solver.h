@@ -107,6 +107,9 @@ class NewtonSolver {
   NewtonOptions& options() { return options_; }
   const CholmodSolver& cholmod() const { return *cholmod_; }
   const std::vector<Energy*>& energies() const { return energies_; }
+  // The step filter: the largest α ≤ 1 that every energy admits for x + α·dx
+  // (Energy::max_step).
+  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
 
  private:
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
@@ -117,7 +120,6 @@ class NewtonSolver {
   enum class CgOutcome { converged, negative_curvature, too_slow };
   CgOutcome preconditioned_cg(const SparseHessian& H, const Eigen::VectorXd& g, Eigen::VectorXd& d,
                               NewtonReport& report);
-  CgOutcome cg_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
   // Truncated PCG on the exact Hessian with the corrected Hessian's factor (see direct).
   void exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d, NewtonReport& report);
   // Adds the energies' PSD corrections to the current Hessian (once per assembly); false
@@ -151,7 +153,6 @@ class NewtonSolver {
   SparseHessian exact_hessian_;     // the uncorrected Hessian of this iteration
   bool exact_differs_ = false;      // the corrections changed hessian_ from exact_hessian_
   CgOutcome last_cg_outcome_ = CgOutcome::converged;  // of this iteration's exact_direction
-  bool negative_curvature_seen_ = false;  // exact_direction stopped at non-positive curvature
   Eigen::VectorXd negative_direction_;   // CG's direction of non-positive curvature
 };
 

@@ -40,18 +40,25 @@ TEST(Simulator, FreeFallIsExactInOneIteration) {
   }
 }
 
-TEST(Simulator, CompressedClothNeedsOneFactorisationPerNewtonIteration) {
-  // A cloth squeezed to 90 % along x, slightly wavy: its exact membrane Hessian is
-  // indefinite. The solver factorises the corrected Hessian once per iteration and
-  // reaches the exact direction by CG; trying the exact Hessian first (the old way)
-  // costs failed factorisations on top.
-  const int n = 10;
-  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, n, n, "xz", 0.2);
+// A 10×10 cloth, and its positions squeezed to 90 % along x and slightly wavy: the exact
+// membrane Hessian there is indefinite (the cloth buckles).
+ClothMesh squeezable_cloth() { return make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, 10, 10, "xz", 0.2); }
+Positions squeezed_to_90_percent(const ClothMesh& mesh) {
   Positions squeezed = mesh.rest;
   for (int i = 0; i < mesh.num_vertices(); ++i) {
     squeezed[3 * i] *= 0.9;
     squeezed[3 * i + 1] += 0.002 * std::sin(12.0 * mesh.rest[3 * i]);
   }
+  return squeezed;
+}
+
+TEST(Simulator, CompressedClothNeedsOneFactorisationPerNewtonIteration) {
+  // A cloth squeezed to 90 % along x, slightly wavy: its exact membrane Hessian is
+  // indefinite. The solver factorises the corrected Hessian once per iteration and
+  // reaches the exact direction by CG; trying the exact Hessian first (the old way)
+  // costs failed factorisations on top.
+  const ClothMesh mesh = squeezable_cloth();
+  const Positions squeezed = squeezed_to_90_percent(mesh);
   for (bool precondition : {true, false}) {
     SimulationSettings s = settings(1.0 / 60);
     s.gravity.setZero();
@@ -73,13 +80,8 @@ TEST(Simulator, BucklingClothAlsoStepsAlongNegativeCurvature) {
   // The squeezed cloth of the test above buckles: CG meets directions of negative
   // curvature of the exact Hessian. With the search on, some iterations also move along
   // them; the step still converges and no accepted iterate raises the energy.
-  const int n = 10;
-  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, n, n, "xz", 0.2);
-  Positions squeezed = mesh.rest;
-  for (int i = 0; i < mesh.num_vertices(); ++i) {
-    squeezed[3 * i] *= 0.9;
-    squeezed[3 * i + 1] += 0.002 * std::sin(12.0 * mesh.rest[3 * i]);
-  }
+  const ClothMesh mesh = squeezable_cloth();
+  const Positions squeezed = squeezed_to_90_percent(mesh);
   for (bool search : {true, false}) {
     SimulationSettings s = settings(1.0 / 60);
     s.gravity.setZero();
@@ -99,13 +101,8 @@ TEST(Simulator, BucklingClothAlsoStepsAlongNegativeCurvature) {
 TEST(Simulator, ChordStepsReuseTheFactorAndNeverRaiseTheEnergy) {
   // Chord steps (−M⁻¹∇E with the iteration's factor) cost no factorisation, only lower the
   // energy, and the step converges to the same tolerance.
-  const int n = 10;
-  ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.5, 0.5, n, n, "xz", 0.2);
-  Positions squeezed = mesh.rest;
-  for (int i = 0; i < mesh.num_vertices(); ++i) {
-    squeezed[3 * i] *= 0.9;
-    squeezed[3 * i + 1] += 0.002 * std::sin(12.0 * mesh.rest[3 * i]);
-  }
+  const ClothMesh mesh = squeezable_cloth();
+  const Positions squeezed = squeezed_to_90_percent(mesh);
   SimulationSettings s = settings(1.0 / 60);
   s.gravity.setZero();
   s.newton.chord_steps = 10;
