@@ -43,6 +43,17 @@ double StrictYaml::number(const YAML::Node& node, const std::string& key, double
   return v;
 }
 
+void StrictYaml::numbers(const YAML::Node& n, const std::string& where, const std::vector<NumberKey>& numbers,
+                         const std::vector<IntegerKey>& integers, std::vector<const char*> other_keys) const {
+  for (const NumberKey& k : numbers) other_keys.push_back(k.key);
+  for (const IntegerKey& k : integers) other_keys.push_back(k.key);
+  check_keys(n, where, other_keys);
+  for (const NumberKey& k : numbers)
+    if (n[k.key]) *k.value = number(n[k.key], where + k.key, k.lo, k.hi);
+  for (const IntegerKey& k : integers)
+    if (n[k.key]) *k.value = static_cast<int>(number(n[k.key], where + k.key, k.lo, k.hi));
+}
+
 double StrictYaml::positive(const YAML::Node& node, const std::string& key) const {
   const double v = number(node, key);
   if (!(v > 0)) fail_at(node, key, "expected a number > 0");

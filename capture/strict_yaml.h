@@ -14,6 +14,18 @@
 
 namespace weft::capture {
 
+// A section's numeric key: the field it sets and the range it allows.
+struct NumberKey {
+  const char* key;
+  double* value;
+  double lo, hi;
+};
+struct IntegerKey {
+  const char* key;
+  int* value;
+  double lo, hi;
+};
+
 struct StrictYaml {
   std::string file;            // display name used in messages
   std::filesystem::path dir;   // relative paths are resolved against this (path())
@@ -41,6 +53,10 @@ struct StrictYaml {
   double number(const YAML::Node& node, const std::string& key, double lo, double hi) const;
   double positive(const YAML::Node& node, const std::string& key) const;
   std::vector<std::string> strings(const YAML::Node& node, const std::string& key) const;
+  // Checks that the section `n` holds only these keys and `other_keys` (which the caller
+  // parses) and reads the numbers present into their fields; `where` prefixes key names.
+  void numbers(const YAML::Node& n, const std::string& where, const std::vector<NumberKey>& numbers,
+               const std::vector<IntegerKey>& integers, std::vector<const char*> other_keys) const;
   // A file path relative to `dir`; it must exist.
   std::string path(const YAML::Node& node, const std::string& key) const;
   // Parses YAML text; a syntax error names the file and line.

@@ -114,32 +114,6 @@ Eigen::Vector3d vec3(const StrictYaml& y, const YAML::Node& n, const std::string
   return {y.number(n[0], key), y.number(n[1], key), y.number(n[2], key)};
 }
 
-// A config section's numeric keys: each names its field and its allowed range.
-struct NumberKey {
-  const char* key;
-  double* value;
-  double lo, hi;
-};
-struct IntegerKey {
-  const char* key;
-  int* value;
-  double lo, hi;
-};
-
-// Checks that `n` holds only these keys (and `other_keys`, parsed by the caller) and reads
-// the numbers that are present into their fields.
-void parse_number_keys(const StrictYaml& y, const YAML::Node& n, const std::string& where,
-                       const std::vector<NumberKey>& numbers, const std::vector<IntegerKey>& integers,
-                       std::vector<const char*> other_keys) {
-  for (const NumberKey& k : numbers) other_keys.push_back(k.key);
-  for (const IntegerKey& k : integers) other_keys.push_back(k.key);
-  y.check_keys(n, where, other_keys);
-  for (const NumberKey& k : numbers)
-    if (n[k.key]) *k.value = y.number(n[k.key], where + k.key, k.lo, k.hi);
-  for (const IntegerKey& k : integers)
-    if (n[k.key]) *k.value = static_cast<int>(y.number(n[k.key], where + k.key, k.lo, k.hi));
-}
-
 void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraConfig& c) {
   if (n["rig"]) {
     const std::string r = y.get<std::string>(n["rig"], "cameras.rig", "studio or wild");
@@ -149,7 +123,7 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
   }
   if (c.kind == CameraRigKind::studio) {
     StudioRigConfig& s = c.studio;
-    parse_number_keys(y, n, "cameras.",
+    y.numbers(n, "cameras.",
                       {{"vertical_fov_deg", &s.vertical_fov_deg, 1, 170},
                        {"radius_m", &s.radius_m, 0.1, 100},
                        {"height_m", &s.height_m, -100, 100},
@@ -162,7 +136,7 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
     if (n["target_m"]) s.target_m = vec3(y, n["target_m"], "cameras.target_m");
   } else {
     WildCameraConfig& w = c.wild;
-    parse_number_keys(y, n, "cameras.",
+    y.numbers(n, "cameras.",
                       {{"vertical_fov_deg", &w.vertical_fov_deg, 1, 170},
                        {"radius_start_m", &w.radius_start_m, 0.1, 100},
                        {"radius_end_m", &w.radius_end_m, 0.1, 100},
@@ -186,7 +160,7 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
 }
 
 void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& n, KeypointNoiseConfig& k) {
-  parse_number_keys(y, n, "keypoints.",
+  y.numbers(n, "keypoints.",
                     {{"noise_px", &k.noise_px, 0, 1000},
                      {"dropout", &k.dropout, 0, 1},
                      {"occluded_dropout", &k.occluded_dropout, 0, 1},

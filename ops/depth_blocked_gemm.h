@@ -55,8 +55,6 @@ T* depth_partial(int64_t elements) {
 // outside one, like a plain product.
 template <class Dst, class Lhs, class Rhs>
 void gemm_in_depth_blocks(Dst&& C, const Lhs& A, const Rhs& B, bool accumulate) {
-  static const int64_t depth_panel = limit_gemm_depth_panel();
-  (void)depth_panel;
   using T = typename std::decay_t<Dst>::Scalar;
   using RowMat = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const int64_t m = C.rows(), n = C.cols(), k = A.cols();
