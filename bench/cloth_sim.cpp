@@ -12,7 +12,8 @@
 // chord_steps, chord_progress, max_iterations (per step; 1 = one linear solve per step, as
 // a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
-// youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m).
+// youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m), the membrane
+// model (membrane=stvk|tension_field) and its compression_ratio.
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
 // exact)
 // Runs single-threaded; prints one line per frame and a median summary.
@@ -148,6 +149,9 @@ int main(int argc_all, char** argv_all) {
     else if (key == "collision_stiffness") s.collision_stiffness = std::atof(value.c_str());
     else if (key == "collision_thickness") s.collision_thickness = std::atof(value.c_str());
     else if (key == "start_from_prediction") s.start_from_prediction = value != "0";
+    else if (key == "membrane" && (value == "stvk" || value == "tension_field"))
+      s.material.membrane = value == "stvk" ? MembraneModel::stvk : MembraneModel::tension_field;
+    else if (key == "compression_ratio") s.material.compression_ratio = std::atof(value.c_str());
     else {
       std::fprintf(stderr, "bench_cloth_sim: unknown option '%s'\n", key.c_str());
       return 2;

@@ -65,7 +65,8 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
     s.settle_frames = static_cast<int>(y.number(n["settle_frames"], "simulation.settle_frames", 0, 10000));
   if (const YAML::Node m = n["material"]) {
     y.check_keys(m, "simulation.material.",
-                 {"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness"});
+                 {"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness", "membrane",
+                  "compression_ratio"});
     auto& mat = s.material;
     if (m["density"]) mat.density = y.positive(m["density"], "simulation.material.density");
     if (m["youngs_modulus"]) mat.youngs_modulus = y.positive(m["youngs_modulus"], "simulation.material.youngs_modulus");
@@ -74,6 +75,14 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
     if (m["bending_stiffness"])
       mat.bending_stiffness = y.number(m["bending_stiffness"], "simulation.material.bending_stiffness", 0, 1e6);
     if (m["thickness"]) mat.thickness = y.positive(m["thickness"], "simulation.material.thickness");
+    if (m["membrane"]) {
+      const std::string model = y.get<std::string>(m["membrane"], "simulation.material.membrane", "a string");
+      if (model != "stvk" && model != "tension_field")
+        y.fail_at(m["membrane"], "simulation.material.membrane", "expected stvk or tension_field, found '" + model + "'");
+      mat.membrane = model == "stvk" ? physics::MembraneModel::stvk : physics::MembraneModel::tension_field;
+    }
+    if (m["compression_ratio"])
+      mat.compression_ratio = y.number(m["compression_ratio"], "simulation.material.compression_ratio", 0, 1);
   }
   if (const YAML::Node c = n["collision"]) {
     y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});

@@ -10,6 +10,10 @@
 
 namespace weft::physics {
 
+const char* to_string(MembraneModel model) {
+  return model == MembraneModel::stvk ? "stvk" : "tension_field";
+}
+
 void validate(const ClothMaterial& m) {
   WEFT_CHECK(std::isfinite(m.density) && m.density > 0, "cloth material: density must be > 0 kg/m², got ", m.density);
   WEFT_CHECK(std::isfinite(m.youngs_modulus) && m.youngs_modulus >= 0,
@@ -20,6 +24,8 @@ void validate(const ClothMaterial& m) {
              "cloth material: bending_stiffness must be >= 0 N·m, got ", m.bending_stiffness);
   WEFT_CHECK(std::isfinite(m.thickness) && m.thickness > 0,
              "cloth material: thickness must be > 0 m, got ", m.thickness);
+  WEFT_CHECK(std::isfinite(m.compression_ratio) && m.compression_ratio >= 0 && m.compression_ratio <= 1,
+             "cloth material: compression_ratio must be in [0, 1], got ", m.compression_ratio);
 }
 
 ClothMesh make_cloth_mesh(const Positions& rest, std::vector<std::array<int, 3>> triangles,

@@ -13,12 +13,23 @@ namespace weft::physics {
 using Vec3 = Eigen::Vector3d;
 using Positions = Eigen::VectorXd;  // 3n, vertex i at [3i, 3i+3)
 
+// How the membrane answers compression (physics/membrane_energy.h).
+enum class MembraneModel {
+  stvk,           // Saint Venant-Kirchhoff in tension and compression alike
+  tension_field,  // StVK in tension; compression relaxed (wrinkling below the mesh scale)
+                  // and resisted only by compression_ratio × StVK
+};
+const char* to_string(MembraneModel model);
+
 struct ClothMaterial {
   double density = 0.2;            // kg/m² (areal)
   double youngs_modulus = 5.0e5;   // Pa
   double poisson_ratio = 0.3;      // dimensionless, in [0, 0.5)
   double bending_stiffness = 1e-5; // N·m
   double thickness = 0.001;        // m (membrane stiffness = E · thickness)
+  MembraneModel membrane = MembraneModel::tension_field;
+  // tension_field: the share of StVK's compressive energy kept, in [0, 1] (1 is StVK).
+  double compression_ratio = 1e-3;
 };
 
 // Throws weft::Error naming the field if a value is non-physical.

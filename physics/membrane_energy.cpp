@@ -1,14 +1,92 @@
 #include "physics/membrane_energy.h"
 
-#include <Eigen/Geometry>
-
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <cmath>
 
 namespace weft::physics {
 
-MembraneEnergy::MembraneEnergy(const ClothMesh& mesh, const ClothMaterial& m) {
-  lambda_ = m.youngs_modulus * m.poisson_ratio / (1.0 - m.poisson_ratio * m.poisson_ratio);
-  mu_ = m.youngs_modulus / (2.0 * (1.0 + m.poisson_ratio));
+namespace {
+
+using Mat32 = Eigen::Matrix<double, 3, 2>;
+
+struct Lame {
+  double lambda, mu;
+};
+Lame lame(const ClothMaterial& m) {
+  return {m.youngs_modulus * m.poisson_ratio / (1.0 - m.poisson_ratio * m.poisson_ratio),
+          m.youngs_modulus / (2.0 * (1.0 + m.poisson_ratio))};
+}
+
+// StVK: ψ = μ tr(G²) + λ/2 tr(G)²; in γ = (G₀₀, G₁₁, G₀₁), tr(G²) = γ₀² + γ₁² + 2γ₂².
+MembraneResponse stvk(const Eigen::Matrix2d& G, Lame l, bool derivatives) {
+  MembraneResponse r;
+  const double tr = G.trace();
+  r.psi = l.mu * (G * G).trace() + 0.5 * l.lambda * tr * tr;
+  if (!derivatives) return r;
+  r.stress = 2.0 * l.mu * G + l.lambda * tr * Eigen::Matrix2d::Identity();
+  r.tangent << 2.0 * l.mu + l.lambda, l.lambda, 0.0,  //
+      l.lambda, 2.0 * l.mu + l.lambda, 0.0,           //
+      0.0, 0.0, 4.0 * l.mu;
+  return r;
+}
+
+// The tension-field relaxation of StVK (see the header): StVK where taut, k·g₁² where
+// wrinkled, zero where slack.
+MembraneResponse relaxed(const Eigen::Matrix2d& G, Lame l, bool derivatives) {
+  // Principal strains g₁,₂ = m ± r with m = (G₀₀+G₁₁)/2, r = sqrt(u² + v²),
+  // u = (G₀₀−G₁₁)/2, v = G₀₁.
+  const double m = 0.5 * (G(0, 0) + G(1, 1));
+  const double u = 0.5 * (G(0, 0) - G(1, 1)), v = 0.5 * (G(0, 1) + G(1, 0));
+  const double r = std::sqrt(u * u + v * v);
+  const double g1 = m + r, g2 = m - r;
+  if (!(g1 > 0)) return {};  // slack: both directions compressed
+  const double s2 = 2.0 * l.mu * g2 + l.lambda * (g1 + g2);
+  if (s2 >= 0) return stvk(G, l, derivatives);  // taut
+  // Wrinkled: r > 0 here, since s₂ < 0 < g₁ needs g₂ < −λg₁/(2μ+λ) < g₁.
+  const double k = 2.0 * l.mu * (l.mu + l.lambda) / (2.0 * l.mu + l.lambda);
+  MembraneResponse out;
+  out.psi = k * g1 * g1;
+  if (!derivatives) return out;
+  // ∂g₁/∂γ and ∂²g₁/∂γ² (= ∂²r/∂γ², PSD); S = 2k·g₁·e₁e₁ᵀ ⪰ 0.
+  const Eigen::Vector3d dg1(0.5 + 0.5 * u / r, 0.5 - 0.5 * u / r, v / r);
+  Eigen::Matrix<double, 2, 3> J;
+  J << 0.5, -0.5, 0.0, 0.0, 0.0, 1.0;  // ∂(u, v)/∂γ
+  Eigen::Matrix2d d2r;
+  d2r << v * v, -u * v, -u * v, u * u;
+  d2r /= r * r * r;
+  const Eigen::Vector3d dpsi = 2.0 * k * g1 * dg1;
+  out.stress << dpsi[0], 0.5 * dpsi[2], 0.5 * dpsi[2], dpsi[1];
+  out.tangent = 2.0 * k * (dg1 * dg1.transpose() + g1 * J.transpose() * d2r * J);
+  return out;
+}
+
+// The compressive part −min(S, 0) of a symmetric 2×2 stress (zero when S ⪰ 0).
+Eigen::Matrix2d compressive_part(const Eigen::Matrix2d& S) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
+  if (eig.eigenvalues()[0] >= 0) return Eigen::Matrix2d::Zero();
+  return eig.eigenvectors() * (-eig.eigenvalues().cwiseMin(0.0)).asDiagonal() *
+         eig.eigenvectors().transpose();
+}
+
+}  // namespace
+
+MembraneResponse membrane_response(const Eigen::Matrix2d& G, const ClothMaterial& material,
+                                   bool derivatives) {
+  const Lame l = lame(material);
+  if (material.membrane == MembraneModel::stvk) return stvk(G, l, derivatives);
+  MembraneResponse rel = relaxed(G, l, derivatives);
+  const double rho = material.compression_ratio;
+  if (rho == 0) return rel;
+  const MembraneResponse full = stvk(G, l, derivatives);
+  // ψ_rel ≤ ψ_stvk, equal where taut: the blend changes only the compressed response.
+  rel.psi += rho * (full.psi - rel.psi);
+  rel.stress += rho * (full.stress - rel.stress);
+  rel.tangent += rho * (full.tangent - rel.tangent);
+  return rel;
+}
+
+MembraneEnergy::MembraneEnergy(const ClothMesh& mesh, const ClothMaterial& m) : material_(m) {
   elements_.reserve(mesh.triangles.size());
   for (const auto& f : mesh.triangles) {
     const Vec3 x0 = mesh.rest_vertex(f[0]);
@@ -33,22 +111,22 @@ void MembraneEnergy::add_pattern(std::vector<std::array<int, 2>>& pairs) const {
     for (int a = 0; a < 3; ++a) pairs.push_back({el.v[a], el.v[(a + 1) % 3]});
 }
 
+Mat32 MembraneEnergy::deformation_gradient(const Element& el, const Eigen::VectorXd& x) const {
+  Mat32 F = Mat32::Zero();
+  for (int a = 0; a < 3; ++a) F += x.segment<3>(3 * el.v[a]) * el.beta.row(a);
+  return F;
+}
+
 bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHessian& c) const {
   if (project_hessian_) return false;
-  using Mat32 = Eigen::Matrix<double, 3, 2>;
   const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
   bool any = false;
   for (const auto& el : elements_) {
-    Mat32 F = Mat32::Zero();
-    for (int a = 0; a < 3; ++a) F += x.segment<3>(3 * el.v[a]) * el.beta.row(a);
+    const Mat32 F = deformation_gradient(el, x);
     const Eigen::Matrix2d G = 0.5 * (F.transpose() * F - I);
-    const Eigen::Matrix2d S = 2.0 * mu_ * G + lambda_ * G.trace() * I;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
-    if (eig.eigenvalues()[0] >= 0) continue;  // in tension: the exact Hessian is PSD
+    const Eigen::Matrix2d s_neg = compressive_part(membrane_response(G, material_).stress);
+    if (s_neg.isZero(0.0)) continue;  // S ⪰ 0: the exact element Hessian is PSD
     any = true;
-    const Eigen::Matrix2d s_neg = eig.eigenvectors() *
-                                  (-eig.eigenvalues().cwiseMin(0.0)).asDiagonal() *
-                                  eig.eigenvectors().transpose();
     const Eigen::Matrix3d w = el.weight * el.beta * s_neg * el.beta.transpose();
     Eigen::Matrix<double, 9, 9> hx = Eigen::Matrix<double, 9, 9>::Zero();
     for (int a = 0; a < 3; ++a)
@@ -60,40 +138,39 @@ bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHess
 
 double MembraneEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
                                 SparseHessian* H) const {
-  using Mat32 = Eigen::Matrix<double, 3, 2>;
   double energy = 0;
   const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
+  const bool derivatives = g || H;
   for (const auto& el : elements_) {
-    Mat32 F = Mat32::Zero();
-    for (int a = 0; a < 3; ++a) F += x.segment<3>(3 * el.v[a]) * el.beta.row(a);
+    const Mat32 F = deformation_gradient(el, x);
     const Eigen::Matrix2d G = 0.5 * (F.transpose() * F - I);
-    const double trG = G.trace();
-    energy += el.weight * (mu_ * (G * G).trace() + 0.5 * lambda_ * trG * trG);
-    if (!g && !H) continue;
-    const Eigen::Matrix2d S = 2.0 * mu_ * G + lambda_ * trG * I;  // second Piola-Kirchhoff
+    const MembraneResponse resp = membrane_response(G, material_, derivatives);
+    energy += el.weight * resp.psi;
+    if (!derivatives) continue;
+    const Eigen::Matrix2d& S = resp.stress;  // second Piola-Kirchhoff
     if (g) {
       const Mat32 P = el.weight * F * S;
       for (int a = 0; a < 3; ++a) g->segment<3>(3 * el.v[a]) += P * el.beta.row(a).transpose();
     }
     if (H) {
-      // d²ψ/dF²[dF] = dF S + F (2μ dG + λ tr(dG) I). Its second part is PSD for any F
-      // (⟨dF, ·⟩ = 2μ‖dG‖² + λ tr(dG)²); only the geometric term dF S is indefinite, when
-      // S has a compressive (negative) eigenvalue. The projection clamps those eigenvalues
-      // of S, which makes the element Hessian PSD by construction and leaves it exact in
-      // tension.
+      // d²ψ/dF²[dF] = dF S + F dS, dS = C[dG]. The second part is PSD whenever the tangent
+      // C is (⟨dF, F dS⟩ = dγᵀ C dγ), which holds for both models; only the geometric term
+      // dF S is indefinite, where S has a compressive (negative) eigenvalue. The
+      // projection clamps those eigenvalues of S, which makes the element Hessian PSD by
+      // construction and leaves it exact where S ⪰ 0.
       Eigen::Matrix2d S_used = S;
-      if (project_hessian_) {
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
-        S_used = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
-                 eig.eigenvectors().transpose();
-      }
+      if (project_hessian_) S_used += compressive_part(S);
       Eigen::Matrix<double, 6, 6> hf;
       for (int k = 0; k < 6; ++k) {
         Mat32 dF = Mat32::Zero();
         dF(k % 3, k / 3) = 1.0;
         const Eigen::Matrix2d FtdF = F.transpose() * dF;
         const Eigen::Matrix2d dG = 0.5 * (FtdF + FtdF.transpose());
-        const Mat32 dP = dF * S_used + F * (2.0 * mu_ * dG + lambda_ * dG.trace() * I);
+        const Eigen::Vector3d dgamma(dG(0, 0), dG(1, 1), dG(0, 1));
+        const Eigen::Vector3d ds = resp.tangent * dgamma;
+        Eigen::Matrix2d dS;
+        dS << ds[0], 0.5 * ds[2], 0.5 * ds[2], ds[1];
+        const Mat32 dP = dF * S_used + F * dS;
         hf.col(k) = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(dP.data());
       }
       hf = 0.5 * (hf + hf.transpose()).eval();

@@ -2,6 +2,7 @@
 // the invariance of the internal energies under rigid motions.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "physics/bending_energy.h"
@@ -54,9 +55,151 @@ TEST(Energies, GravityMatchesFiniteDifferences) {
 
 TEST(Energies, MembraneMatchesFiniteDifferencesStretchedAndCompressed) {
   const ClothMesh mesh = small_grid();
-  MembraneEnergy e(mesh, material());
-  testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.2, 0.01, 4));
-  testing::expect_derivatives_match(e, perturbed(mesh.rest, 0.8, 0.02, 5));
+  for (MembraneModel model : {MembraneModel::stvk, MembraneModel::tension_field}) {
+    SCOPED_TRACE(to_string(model));
+    ClothMaterial m = material();
+    m.membrane = model;
+    m.compression_ratio = 1e-2;
+    MembraneEnergy e(mesh, m);
+    testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.2, 0.01, 4));
+    testing::expect_derivatives_match(e, perturbed(mesh.rest, 0.8, 0.02, 5));
+    // Near rest, with noise: elements on both sides of the tension/compression boundary.
+    testing::expect_derivatives_match(e, perturbed(mesh.rest, 1.0, 0.004, 6));
+  }
+}
+
+// The tension-field regime of a Green strain: 0 slack, 1 wrinkled, 2 taut.
+int regime(const Eigen::Matrix2d& G, const ClothMaterial& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(G);
+  const double g2 = eig.eigenvalues()[0], g1 = eig.eigenvalues()[1];
+  const double lambda = m.youngs_modulus * m.poisson_ratio / (1 - m.poisson_ratio * m.poisson_ratio);
+  const double mu = m.youngs_modulus / (2 * (1 + m.poisson_ratio));
+  if (g1 <= 0) return 0;
+  return 2 * mu * g2 + lambda * (g1 + g2) < 0 ? 1 : 2;
+}
+
+// One right triangle (legs 0.1 m along x and z) deformed by the 2×2 map A of its plane
+// (x, z), lifted off the plane by `lift` at its third vertex.
+Positions deformed_triangle(const Eigen::Matrix2d& A, double lift = 0) {
+  Positions x(9);
+  const Eigen::Vector2d p[3] = {{0, 0}, {0.1, 0}, {0, 0.1}};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector2d q = A * p[k];
+    x.segment<3>(3 * k) << q[0], k == 2 ? lift : 0.0, q[1];
+  }
+  return x;
+}
+ClothMesh one_triangle() { return make_cloth_mesh(deformed_triangle(Eigen::Matrix2d::Identity()), {{0, 2, 1}}, 0.2); }
+
+TEST(Energies, TensionFieldMembraneMatchesFiniteDifferencesInEveryRegime) {
+  // Single elements well inside each regime (slack, wrinkled, taut), with and without the
+  // StVK share, then the PSD projection: value, gradient and exact Hessian agree with
+  // central differences.
+  const ClothMesh mesh = one_triangle();
+  struct Case {
+    Eigen::Matrix2d A;
+    int regime;
+  };
+  std::vector<Case> cases;
+  auto map = [](double a, double b, double c, double d) { return (Eigen::Matrix2d() << a, b, c, d).finished(); };
+  cases.push_back({map(0.9, 0.02, -0.01, 0.85), 0});   // compressed both ways
+  cases.push_back({map(1.1, 0.03, 0.01, 0.9), 1});     // stretched along x, compressed along z
+  cases.push_back({map(0.8, 0.1, 0.05, 1.15), 1});     // sheared, one direction stretched
+  cases.push_back({map(1.1, 0.02, -0.03, 1.05), 2});   // stretched both ways
+  for (double rho : {0.0, 1e-2}) {
+    ClothMaterial m = material();
+    m.membrane = MembraneModel::tension_field;
+    m.compression_ratio = rho;
+    for (const Case& c : cases) {
+      SCOPED_TRACE("rho " + std::to_string(rho) + " regime " + std::to_string(c.regime));
+      const Positions x = deformed_triangle(c.A, 0.01);
+      // The Green strain of the element, to check the case is in the regime it claims.
+      MembraneEnergy e(mesh, m);
+      // FᵀF from the deformed unit edges (the lift changes it a little from AᵀA).
+      const Eigen::Vector3d ex = (x.segment<3>(3 * 1) - x.segment<3>(0)) / 0.1;
+      const Eigen::Vector3d ez = (x.segment<3>(3 * 2) - x.segment<3>(0)) / 0.1;
+      Eigen::Matrix2d FtF;
+      FtF << ex.dot(ex), ex.dot(ez), ex.dot(ez), ez.dot(ez);
+      const Eigen::Matrix2d G = 0.5 * (FtF - Eigen::Matrix2d::Identity());
+      ASSERT_EQ(regime(G, m), c.regime);
+      if (c.regime == 0 && rho == 0) {
+        Eigen::VectorXd g = Eigen::VectorXd::Zero(9);
+        EXPECT_EQ(e.evaluate(x, &g, nullptr), 0.0);
+        EXPECT_EQ(g.lpNorm<Eigen::Infinity>(), 0.0);
+        continue;
+      }
+      testing::expect_derivatives_match(e, x, 1e-5);
+    }
+  }
+}
+
+TEST(Energies, TensionFieldCompressionCostsOnlyTheRatioOfStvk) {
+  // Pure compression (slack): energy and force are compression_ratio × StVK's, and zero
+  // with a zero ratio. Pure tension: identical to StVK.
+  const ClothMesh mesh = one_triangle();
+  ClothMaterial stvk = material(), tf = material();
+  stvk.membrane = MembraneModel::stvk;
+  tf.membrane = MembraneModel::tension_field;
+  tf.compression_ratio = 1e-3;
+  MembraneEnergy e_stvk(mesh, stvk), e_tf(mesh, tf);
+  const Positions squeezed = deformed_triangle(0.9 * Eigen::Matrix2d::Identity());
+  Eigen::VectorXd g_stvk = Eigen::VectorXd::Zero(9), g_tf = Eigen::VectorXd::Zero(9);
+  const double w_stvk = e_stvk.evaluate(squeezed, &g_stvk, nullptr);
+  const double w_tf = e_tf.evaluate(squeezed, &g_tf, nullptr);
+  EXPECT_GT(w_stvk, 0);
+  EXPECT_NEAR(w_tf, 1e-3 * w_stvk, 1e-12 * w_stvk);
+  EXPECT_LE((g_tf - 1e-3 * g_stvk).norm(), 1e-12 * g_stvk.norm());
+  tf.compression_ratio = 0;
+  MembraneEnergy e_free(mesh, tf);
+  Eigen::VectorXd g_free = Eigen::VectorXd::Zero(9);
+  EXPECT_EQ(e_free.evaluate(squeezed, &g_free, nullptr), 0.0);
+  EXPECT_EQ(g_free.norm(), 0.0);
+  const Positions stretched = deformed_triangle((Eigen::Matrix2d() << 1.1, 0.02, 0.0, 1.05).finished());
+  g_stvk.setZero();
+  g_tf.setZero();
+  EXPECT_DOUBLE_EQ(e_free.evaluate(stretched, &g_tf, nullptr), e_stvk.evaluate(stretched, &g_stvk, nullptr));
+  EXPECT_LE((g_tf - g_stvk).norm(), 1e-12 * g_stvk.norm());
+}
+
+TEST(Energies, TensionFieldUniaxialTensionContractsFreely) {
+  // Stretched by s along x and held at any width below the free Poisson contraction
+  // (g_z < −ν g_x; 0.968 of the width at s = 1.1): the
+  // relaxed energy is the uniaxial one, A·t·k·g², k = 2μ(μ+λ)/(2μ+λ) = E/2 in plane
+  // stress (the same as ψ_stvk with the free contraction g_z = −ν g_x).
+  const ClothMesh mesh = one_triangle();
+  ClothMaterial m = material();
+  m.membrane = MembraneModel::tension_field;
+  m.compression_ratio = 0;
+  MembraneEnergy e(mesh, m);
+  const double s = 1.1, gx = 0.5 * (s * s - 1);
+  const double area_t = 0.5 * 0.1 * 0.1 * m.thickness;
+  for (double width : {0.95, 0.9, 0.7}) {
+    const Positions x = deformed_triangle((Eigen::Matrix2d() << s, 0, 0, width).finished());
+    EXPECT_NEAR(e.evaluate(x, nullptr, nullptr), area_t * 0.5 * m.youngs_modulus * gx * gx,
+                1e-12 * area_t * m.youngs_modulus) << "width " << width;
+  }
+}
+
+TEST(Energies, TensionFieldStressIsContinuousAcrossTheWrinklingBoundary) {
+  // C¹: the stress just inside the taut regime equals the stress just inside the
+  // wrinkled one, for the blended model too.
+  ClothMaterial m = material();
+  m.membrane = MembraneModel::tension_field;
+  const double lambda = m.youngs_modulus * m.poisson_ratio / (1 - m.poisson_ratio * m.poisson_ratio);
+  const double mu = m.youngs_modulus / (2 * (1 + m.poisson_ratio));
+  const double g1 = 0.05, g2_star = -lambda * g1 / (2 * mu + lambda);  // s₂ = 0 here
+  const Eigen::Matrix2d R = Eigen::Rotation2Dd(0.4).toRotationMatrix();
+  for (double rho : {0.0, 1e-3}) {
+    m.compression_ratio = rho;
+    auto at = [&](double g2) {
+      return membrane_response(R * Eigen::Vector2d(g1, g2).asDiagonal() * R.transpose(), m);
+    };
+    const MembraneResponse taut = at(g2_star + 1e-9), wrinkled = at(g2_star - 1e-9);
+    ASSERT_EQ(regime(R * Eigen::Vector2d(g1, g2_star + 1e-9).asDiagonal() * R.transpose(), m), 2);
+    ASSERT_EQ(regime(R * Eigen::Vector2d(g1, g2_star - 1e-9).asDiagonal() * R.transpose(), m), 1);
+    EXPECT_NEAR(taut.psi, wrinkled.psi, 1e-6 * taut.psi);
+    EXPECT_LE((taut.stress - wrinkled.stress).norm(), 1e-5 * taut.stress.norm()) << "rho " << rho;
+  }
 }
 
 TEST(Energies, MembraneMatchesUniaxialStretchFormula) {
