@@ -66,7 +66,7 @@ double box_distance2(const Eigen::Vector3d& p, const Eigen::Vector3d& lo,
 
 BodyMesh::BodyMesh(Eigen::MatrixX3d vertices, std::vector<std::array<int, 3>> faces,
                    std::vector<int> inactive_faces)
-    : vertices_(std::move(vertices)), faces_(std::move(faces)) {
+    : vertices_(std::move(vertices)), previous_vertices_(vertices_), faces_(std::move(faces)) {
   const int nv = static_cast<int>(vertices_.rows());
   std::vector<char> inactive(faces_.size(), 0);
   for (int f : inactive_faces) {
@@ -146,9 +146,17 @@ void BodyMesh::refit(int id) {
 }
 
 void BodyMesh::set_vertices(const Eigen::MatrixX3d& vertices) {
-  WEFT_CHECK(vertices.rows() == vertices_.rows(), "body mesh: ", vertices.rows(),
-             " new vertices for a mesh of ", vertices_.rows());
-  vertices_ = vertices;
+  set_vertices(vertices, vertices_);
+}
+
+void BodyMesh::set_vertices(const Eigen::MatrixX3d& vertices, const Eigen::MatrixX3d& previous) {
+  WEFT_CHECK(vertices.rows() == vertices_.rows() && previous.rows() == vertices_.rows(),
+             "body mesh: ", vertices.rows(), " new vertices (", previous.rows(),
+             " previous) for a mesh of ", vertices_.rows());
+  // Either argument may alias a member (set_vertices(v) passes vertices_): copy first.
+  Eigen::MatrixX3d now = vertices, before = previous;
+  previous_vertices_ = std::move(before);
+  vertices_ = std::move(now);
   if (!nodes_.empty()) refit(0);
   compute_normals();
 }

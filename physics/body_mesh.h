@@ -27,10 +27,17 @@ class BodyMesh {
   BodyMesh(Eigen::MatrixX3d vertices, std::vector<std::array<int, 3>> faces,
            std::vector<int> inactive_faces = {});
 
-  // Moves the vertices (same count) and refits the tree; normals are recomputed.
+  // Moves the vertices (same count) and refits the tree; normals are recomputed. The
+  // positions before the call become previous_vertices() (the body's motion over the
+  // step, which friction drags the cloth along with).
   void set_vertices(const Eigen::MatrixX3d& vertices);
+  // The same, with the positions the motion starts from given explicitly (e.g. the first
+  // sub-step of a frame whose start the mesh never was at).
+  void set_vertices(const Eigen::MatrixX3d& vertices, const Eigen::MatrixX3d& previous);
 
   const Eigen::MatrixX3d& vertices() const { return vertices_; }
+  // Positions before the last set_vertices (metres); equal to vertices() until then.
+  const Eigen::MatrixX3d& previous_vertices() const { return previous_vertices_; }
   const std::vector<std::array<int, 3>>& faces() const { return faces_; }
   int num_active_faces() const { return static_cast<int>(active_.size()); }
 
@@ -49,7 +56,7 @@ class BodyMesh {
   void refit(int node);
   void compute_normals();
 
-  Eigen::MatrixX3d vertices_;
+  Eigen::MatrixX3d vertices_, previous_vertices_;
   std::vector<std::array<int, 3>> faces_;
   std::vector<int> active_;          // active face ids, reordered by the tree
   std::vector<Node> nodes_;

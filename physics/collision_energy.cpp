@@ -21,8 +21,11 @@ DistanceSample signed_distance(const SphereObstacle& sphere, const Eigen::Vector
 }
 
 DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x) {
+  return signed_distance(body.closest_point(x), x);
+}
+
+DistanceSample signed_distance(const ClosestPoint& c, const Eigen::Vector3d& x) {
   DistanceSample s;
-  const ClosestPoint c = body.closest_point(x);
   if (c.face < 0) return s;
   s.distance = c.distance;
   const Eigen::Vector3d r = x - c.point;

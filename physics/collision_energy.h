@@ -18,7 +18,8 @@ namespace weft::physics {
 
 struct SphereObstacle {
   Eigen::Vector3d center;
-  double radius;  // metres
+  double radius;          // metres
+  double friction = 0.3;  // Coulomb coefficient μ against the cloth (FrictionEnergy); 0: none
 };
 
 // Signed distance of x to an obstacle with its gradient and Hessian.
@@ -29,6 +30,8 @@ struct DistanceSample {
 };
 DistanceSample signed_distance(const SphereObstacle& sphere, const Eigen::Vector3d& x);
 DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x);
+// The same from a closest point `c` of x already found on the body.
+DistanceSample signed_distance(const ClosestPoint& c, const Eigen::Vector3d& x);
 
 class CollisionEnergy : public Energy {
  public:
@@ -39,6 +42,11 @@ class CollisionEnergy : public Energy {
   const std::vector<SphereObstacle>& spheres() const { return spheres_; }
   const std::vector<const BodyMesh*>& bodies() const { return bodies_; }
   double thickness() const { return thickness_; }
+  double stiffness() const { return k_; }
+  // The penalty's force magnitude −dE/dd at signed distance d (N; 0 outside the band).
+  double normal_force(double d) const {
+    return d < thickness_ ? 0.5 * k_ / thickness_ * (thickness_ - d) * (thickness_ - d) : 0.0;
+  }
 
   std::string name() const override { return "collision"; }
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const override;
