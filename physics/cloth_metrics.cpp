@@ -30,7 +30,7 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
   WEFT_CHECK(x.size() == 3 * n && x_prev.size() == x.size() && x_prev2.size() == x.size(),
              "metrics: frames must have ", 3 * n, " entries");
   WEFT_CHECK(h > 0, "metrics: time step must be > 0 s, got ", h);
-  const Positions f = sim.total_force(x);
+  const Positions f = sim.total_force(x) + sim.friction_force(x_prev, x);
   const Positions a = (x - 2.0 * x_prev + x_prev2) / (h * h);
   const double g = sim.settings().gravity.norm();
   double sum = 0, sum_rel = 0;

@@ -4,7 +4,10 @@
 //    difference (x_t − 2x_{t−1} + x_{t−2})/h² of three consecutive frames, f the sum of
 //    internal (membrane, bending), external (gravity, pins, rays) and collision forces at
 //    the newest frame x_t (the implicit Euler convention, so a converged simulated step
-//    has r ≈ Newton's residual). Reported in newtons and relative to m_i‖g‖.
+//    has r ≈ Newton's residual), plus friction over the frame x_{t−1} → x_t
+//    (ClothSimulator::friction_force): without it a cloth held still on a slope by static
+//    friction would show its whole tangential weight as out of balance. Reported in
+//    newtons and relative to m_i‖g‖.
 //  - Penetration: over cloth vertices with negative signed distance to an obstacle, the
 //    mean and max depth (m); 0 when none penetrates.
 #include "physics/cloth_simulator.h"

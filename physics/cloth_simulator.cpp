@@ -15,6 +15,8 @@ void validate(const SimulationSettings& s) {
              s.collision_thickness);
   WEFT_CHECK(s.collision_stiffness > 0, "simulation: collision stiffness must be > 0 N/m, got ",
              s.collision_stiffness);
+  WEFT_CHECK(std::isfinite(s.friction_velocity) && s.friction_velocity > 0,
+             "simulation: friction velocity must be > 0 m/s, got ", s.friction_velocity);
   WEFT_CHECK(s.pin_stiffness > 0, "simulation: pin stiffness must be > 0 N/m, got ", s.pin_stiffness);
   WEFT_CHECK(s.constraint_stiffness >= 0, "simulation: constraint stiffness must be >= 0 N/m, got ",
              s.constraint_stiffness);
@@ -35,10 +37,12 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
                                                 std::max(settings_.constraint_stiffness, 0.0));
   collision_ = std::make_unique<CollisionEnergy>(n, settings_.collision_thickness,
                                                  settings_.collision_stiffness);
+  friction_ = std::make_unique<FrictionEnergy>(n, *collision_, settings_.friction_velocity,
+                                               settings_.time_step / settings_.substeps);
   solver_ = std::make_unique<NewtonSolver>(
       n,
       std::vector<Energy*>{inertia_.get(), gravity_.get(), membrane_.get(), bending_.get(),
-                           pins_.get(), rays_.get(), collision_.get()},
+                           pins_.get(), rays_.get(), collision_.get(), friction_.get()},
       settings_.newton);
   // Convergence is judged per vertex against its weight under standard gravity (not the
   // scene's gravity, which may be zero).
@@ -55,17 +59,25 @@ void ClothSimulator::set_pins(std::vector<int> vertices, std::vector<Vec3> targe
 }
 
 void ClothSimulator::set_spheres(std::vector<SphereObstacle> spheres) {
-  for (const auto& s : spheres)
+  for (const auto& s : spheres) {
     WEFT_CHECK(s.radius > 0 && s.center.allFinite(), "sphere obstacle: radius must be > 0 m, got ",
                s.radius);
+    WEFT_CHECK(std::isfinite(s.friction) && s.friction >= 0,
+               "sphere obstacle: friction must be >= 0, got ", s.friction);
+  }
   collision_->set_spheres(std::move(spheres));
 }
 
-int ClothSimulator::add_body(BodyMesh body) {
+int ClothSimulator::add_body(BodyMesh body, double friction) {
+  WEFT_CHECK(std::isfinite(friction) && friction >= 0, "body obstacle: friction must be >= 0, got ",
+             friction);
   bodies_.push_back(std::make_unique<BodyMesh>(std::move(body)));
   std::vector<const BodyMesh*> ptrs;
   for (const auto& b : bodies_) ptrs.push_back(b.get());
   collision_->set_bodies(std::move(ptrs));
+  std::vector<double> mu = friction_->body_friction();
+  mu.push_back(friction);
+  friction_->set_body_friction(std::move(mu));
   return static_cast<int>(bodies_.size()) - 1;
 }
 
@@ -80,6 +92,7 @@ NewtonReport ClothSimulator::advance(Positions& x, Positions& v, double h) {
   WEFT_CHECK(x.size() == 3 * mesh_.num_vertices() && v.size() == x.size(),
              "cloth step: state has ", x.size(), " entries, expected ", 3 * mesh_.num_vertices());
   inertia_->set_time_step(h);
+  friction_->set_time_step(h);  // its smoothing ε = ε_v·h
   const Positions x_start = x;
   Positions x_hat = x + h * v;
   if (!x_hat.allFinite()) x_hat = x;  // a non-finite velocity carries no information
@@ -129,7 +142,13 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
   for (int s = 0; s < substeps; ++s) {
     if (body_now) {
       const double t = static_cast<double>(s + 1) / substeps;
-      bodies_[0]->set_vertices((1.0 - t) * (*body_prev) + t * (*body_now));
+      const Eigen::MatrixX3d now = (1.0 - t) * (*body_prev) + t * (*body_now);
+      // The first sub-step moves the body from body_prev, wherever the mesh was left (its
+      // motion over the sub-step drags the cloth by friction).
+      if (s == 0)
+        bodies_[0]->set_vertices(now, *body_prev);
+      else
+        bodies_[0]->set_vertices(now);
     }
     NewtonReport r = advance(result.x, v, hs);
     result.newton_iterations += r.iterations;
@@ -148,6 +167,16 @@ Positions ClothSimulator::total_force(const Positions& x) const {
                             pins_.get(),    rays_.get(),     collision_.get()};
   for (const Energy* e : forces)
     e->evaluate(x, &g, nullptr);
+  return -g;
+}
+
+Positions ClothSimulator::friction_force(const Positions& x_prev, const Positions& x) const {
+  // A copy: the simulator's own energy keeps the lag of its last sub-step.
+  FrictionEnergy frame = *friction_;
+  frame.set_time_step(settings_.time_step);
+  frame.lag(x_prev, settings_.substeps);
+  Positions g = Positions::Zero(x.size());
+  frame.evaluate(x, &g, nullptr);
   return -g;
 }
 

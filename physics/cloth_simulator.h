@@ -1,7 +1,7 @@
 #pragma once
 // One cloth with its obstacles, advanced by fully implicit Euler: each step minimises
 //   E(x) = 1/(2h²)‖x − x_n − h v_n‖²_M + W_membrane + W_bend − f_gravityᵀx
-//          + E_pins + E_collision(x; obstacles) + E_cons(x)
+//          + E_pins + E_collision(x; obstacles) + D_friction(x; x_n) + E_cons(x)
 // with the Newton solver. The simulator is the layer S of the method (see step()).
 #include <memory>
 #include <vector>
@@ -10,6 +10,7 @@
 #include "physics/body_mesh.h"
 #include "physics/cloth_model.h"
 #include "physics/collision_energy.h"
+#include "physics/friction_energy.h"
 #include "physics/membrane_energy.h"
 #include "physics/newton_solver.h"
 #include "physics/vertex_energies.h"
@@ -26,6 +27,14 @@ struct SimulationSettings {
   ClothMaterial material;
   double collision_thickness = 0.005;  // m
   double collision_stiffness = 1.0e4;  // N/m
+  // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
+  // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
+  // creeps at under ε_v (measured 0.48 mm/s on a 20° slope with μ = 0.5). 1e-3 m/s (IPC's
+  // usual choice): under a millimetre per second, while the static regime's stiffness
+  // 2μλ/(ε_v·h) stays about 100× the inertia m/h² (μ = 0.5, λ ≈ m·g, h = 10 ms); a
+  // smaller ε_v makes static friction stiffer and the onset of sliding a sharper kink
+  // for Newton.
+  double friction_velocity = 1.0e-3;
   double pin_stiffness = 1.0e4;        // N/m
   double constraint_stiffness = 1.0e2; // N/m, silhouette rays
   NewtonOptions newton;
@@ -68,8 +77,10 @@ class ClothSimulator {
   // Soft pins holding `vertices` at `targets` (default: their rest positions).
   void set_pins(std::vector<int> vertices, std::vector<Vec3> targets = {});
   void set_spheres(std::vector<SphereObstacle> spheres);
-  // Adds a body mesh obstacle; returns its index.
-  int add_body(BodyMesh body);
+  // Adds a body mesh obstacle with its Coulomb friction coefficient against the cloth
+  // (0.3: cloth on skin, ARCSim's default against obstacles; 0 for none); returns its
+  // index. Spheres carry theirs in SphereObstacle::friction.
+  int add_body(BodyMesh body, double friction = 0.3);
   BodyMesh& body(int index) { return *bodies_.at(index); }
   int num_bodies() const { return static_cast<int>(bodies_.size()); }
   void set_ray_targets(std::vector<RayTarget> targets);
@@ -87,8 +98,14 @@ class ClothSimulator {
                   const Eigen::MatrixX3d* body_now = nullptr);
 
   // Forces at x (N, 3n): internal (membrane + bending), external (gravity, pins,
-  // silhouette rays) and collision, summed.
+  // silhouette rays) and collision, summed. Not friction: it is not a function of x alone
+  // but of the step's motion (see friction_force).
   Positions total_force(const Positions& x) const;
+  // Friction force (N, 3n) on the cloth at x after a frame that started at x_prev: the
+  // friction energy lagged at x_prev over one frame (time_step; the moving body's motion
+  // of the last sub-step times the sub-step count, exact for step()'s linear motion).
+  // With one sub-step this is the friction Newton balanced at the end of that frame.
+  Positions friction_force(const Positions& x_prev, const Positions& x) const;
   // Smallest signed distance of a point to any obstacle (m; +inf without obstacles).
   double signed_distance(const Vec3& p) const { return collision_->min_signed_distance(p); }
 
@@ -102,6 +119,7 @@ class ClothSimulator {
   std::unique_ptr<PinEnergy> pins_;
   std::unique_ptr<RayConstraintEnergy> rays_;
   std::unique_ptr<CollisionEnergy> collision_;
+  std::unique_ptr<FrictionEnergy> friction_;
   std::vector<std::unique_ptr<BodyMesh>> bodies_;
   std::unique_ptr<NewtonSolver> solver_;
 };

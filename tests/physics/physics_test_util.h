@@ -12,9 +12,11 @@ namespace weft::physics::testing {
 
 // Central differences of an energy's value and gradient; the Hessian is checked with its
 // PSD projection off (the exact Hessian), as PyTorch checks gradients: float64, eps 1e-6.
-inline void expect_derivatives_match(Energy& e, const Eigen::VectorXd& x, double rtol = 1e-4) {
+// The step begins at x_start (default x itself), for energies lagged at the step's start.
+inline void expect_derivatives_match(Energy& e, const Eigen::VectorXd& x, double rtol = 1e-4,
+                                     const Eigen::VectorXd* x_start = nullptr) {
   const int n3 = static_cast<int>(x.size());
-  e.begin_step(x);
+  e.begin_step(x_start ? *x_start : x);
   e.set_hessian_projection(false);
   Eigen::VectorXd g = Eigen::VectorXd::Zero(n3);
   e.evaluate(x, &g, nullptr);
