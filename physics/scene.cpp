@@ -218,8 +218,11 @@ Scene load_scene(const std::string& path) {
     for (size_t k = 0; k < list.size(); ++k) {
       const std::string prefix = "obstacles[" + std::to_string(k) + "]";
       Section o(list[k], path, prefix);
-      o.allow({"sphere", "mesh", "mesh_sequence", "inactive_faces"});
+      o.allow({"sphere", "mesh", "mesh_sequence", "inactive_faces", "friction"});
       SceneObstacle ob;
+      ob.friction = o.number_or("friction", ob.friction);
+      WEFT_CHECK(std::isfinite(ob.friction) && ob.friction >= 0, path, ": '", o.key("friction"),
+                 "' must be >= 0, got ", ob.friction);
       const int kinds = o.has("sphere") + o.has("mesh") + o.has("mesh_sequence");
       WEFT_CHECK(kinds == 1, path, ": '", prefix, "' needs exactly one of sphere, mesh, mesh_sequence");
       if (o.has("sphere")) {
@@ -228,6 +231,7 @@ Scene load_scene(const std::string& path) {
         ob.kind = SceneObstacle::Kind::sphere;
         ob.sphere.center = sp.vector("center", 3);
         ob.sphere.radius = sp.positive("radius", 0);
+        ob.sphere.friction = ob.friction;
         WEFT_CHECK(!o.has("inactive_faces"), path, ": '", prefix, ".inactive_faces' applies to meshes only");
       } else if (o.has("mesh")) {
         ob.kind = SceneObstacle::Kind::mesh;
@@ -252,9 +256,10 @@ Scene load_scene(const std::string& path) {
   }
   if (top.has("collision")) {
     Section c(top.node("collision"), path, "collision");
-    c.allow({"thickness", "stiffness"});
+    c.allow({"thickness", "stiffness", "friction_velocity"});
     s.collision_thickness = c.positive("thickness", s.collision_thickness);
     s.collision_stiffness = c.positive("stiffness", s.collision_stiffness);
+    s.friction_velocity = c.positive("friction_velocity", s.friction_velocity);
   }
   if (top.has("solver")) {
     Section sv(top.node("solver"), path, "solver");
@@ -322,9 +327,11 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
   }
   sim.set_spheres(spheres);
   // The moving body goes first: the simulator's step() moves body 0.
-  if (sequence) sim.add_body(load_body(sequence_path(sequence->path, 0), sequence->inactive_faces));
+  if (sequence)
+    sim.add_body(load_body(sequence_path(sequence->path, 0), sequence->inactive_faces),
+                 sequence->friction);
   for (const auto& o : scene.obstacles)
-    if (o.kind == SceneObstacle::Kind::mesh) sim.add_body(load_body(o.path, o.inactive_faces));
+    if (o.kind == SceneObstacle::Kind::mesh) sim.add_body(load_body(o.path, o.inactive_faces), o.friction);
 
   if (!out_dir.empty()) {
     std::error_code ec;

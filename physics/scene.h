@@ -19,6 +19,7 @@ struct SceneObstacle {
   SphereObstacle sphere{};
   std::string path;                 // mesh file, or the sequence's printf-style pattern
   std::vector<int> inactive_faces;  // faces left out of collisions
+  double friction = 0.3;            // Coulomb μ against the cloth (spheres: also in sphere)
 };
 
 struct Scene {

@@ -95,6 +95,38 @@ cloth: {grid: {size: [1, 1], resolution: [4, 4]}}
 obstacles:
   - sphere: {center: [0, 0], radius: 0.3}
 )", {"obstacles[0].sphere.center"});
+  expect_error(R"(
+cloth: {grid: {size: [1, 1], resolution: [4, 4]}}
+obstacles:
+  - sphere: {center: [0, 0, 0], radius: 0.3}
+    friction: -0.1
+)", {"'obstacles[0].friction' must be >= 0, got -0.1"});
+  expect_error(R"(
+cloth: {grid: {size: [1, 1], resolution: [4, 4]}}
+obstacles:
+  - sphere: {center: [0, 0, 0], radius: 0.3}
+  - sphere: {center: [0, 1, 0], radius: 0.3}
+    friction: rough
+)", {"obstacles[1].friction", "must be a number", "rough"});
+  expect_error(std::string(kGrid) + "collision: {friction_velocity: 0}\n",
+               {"collision.friction_velocity", "> 0"});
+}
+
+TEST_F(SceneTest, ObstacleFrictionIsReadPerObstacle) {
+  const Scene s = load_scene(write("scene.yaml", std::string(kGrid) + R"(
+obstacles:
+  - sphere: {center: [0, 0, 0], radius: 0.3}
+    friction: 0.7
+  - sphere: {center: [0, 2, 0], radius: 0.3}
+  - sphere: {center: [0, 4, 0], radius: 0.3}
+    friction: 0
+collision: {friction_velocity: 0.002}
+)"));
+  ASSERT_EQ(s.obstacles.size(), 3u);
+  EXPECT_EQ(s.obstacles[0].sphere.friction, 0.7);
+  EXPECT_EQ(s.obstacles[1].sphere.friction, 0.3);  // the default
+  EXPECT_EQ(s.obstacles[2].sphere.friction, 0.0);  // off
+  EXPECT_EQ(s.settings.friction_velocity, 0.002);
 }
 
 TEST_F(SceneTest, RunWritesFramesAndMetrics) {
