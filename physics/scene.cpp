@@ -157,10 +157,11 @@ Scene load_scene(const std::string& path) {
 
   WEFT_CHECK(top.has("cloth"), path, ": missing key 'cloth'");
   Section cloth(top.node("cloth"), path, "cloth");
-  cloth.allow({"grid", "mesh", "material", "pins", "pin_stiffness"});
+  cloth.allow({"grid", "mesh", "material", "pins", "pin_stiffness", "initial"});
   if (cloth.has("material")) {
     Section mat(cloth.node("material"), path, "cloth.material");
-    mat.allow({"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness"});
+    mat.allow({"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness",
+               "membrane", "compression_ratio"});
     ClothMaterial& m = s.material;
     m.density = mat.number_or("density", m.density);
     WEFT_CHECK(m.density > 0, path, ": 'cloth.material.density' must be > 0 kg/m², got ", m.density);
@@ -174,6 +175,13 @@ Scene load_scene(const std::string& path) {
     WEFT_CHECK(m.bending_stiffness >= 0, path,
                ": 'cloth.material.bending_stiffness' must be >= 0 N·m, got ", m.bending_stiffness);
     m.thickness = mat.positive("thickness", m.thickness);
+    const std::string model = mat.get_or<std::string>("membrane", to_string(m.membrane), "a string");
+    WEFT_CHECK(model == "stvk" || model == "tension_field", path,
+               ": 'cloth.material.membrane' must be stvk or tension_field, got '", model, "'");
+    m.membrane = model == "stvk" ? MembraneModel::stvk : MembraneModel::tension_field;
+    m.compression_ratio = mat.number_or("compression_ratio", m.compression_ratio);
+    WEFT_CHECK(std::isfinite(m.compression_ratio) && m.compression_ratio >= 0 && m.compression_ratio <= 1,
+               path, ": 'cloth.material.compression_ratio' must be in [0, 1], got ", m.compression_ratio);
   }
   s.pin_stiffness = cloth.positive("pin_stiffness", s.pin_stiffness);
   WEFT_CHECK(cloth.has("grid") != cloth.has("mesh"), path,
@@ -199,6 +207,26 @@ Scene load_scene(const std::string& path) {
     Positions rest(3 * m.vertices.rows());
     for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) rest.segment<3>(3 * i) = m.vertices.row(i).transpose();
     scene.cloth = make_cloth_mesh(rest, m.faces, s.material.density);
+  }
+  scene.initial = scene.initial_previous = scene.cloth.rest;
+  if (cloth.has("initial")) {
+    // Any state, as network predictions are: stretched, compressed, inside an obstacle.
+    Section init(cloth.node("initial"), path, "cloth.initial");
+    init.allow({"positions", "previous"});
+    auto read_state = [&](const char* k) {
+      const std::string key = init.key(k);
+      const std::string file = resolve(path, init.get<std::string>(k, "a file path"));
+      WEFT_CHECK(fs::exists(file), path, ": '", key, "': file not found: ", file);
+      const TriangleMesh m = read_obj(file);
+      WEFT_CHECK(m.vertices.rows() == scene.cloth.num_vertices(), path, ": '", key, "': ", file, " has ",
+                 m.vertices.rows(), " vertices, the cloth has ", scene.cloth.num_vertices());
+      WEFT_CHECK(m.vertices.allFinite(), path, ": '", key, "': ", file, " has a non-finite vertex");
+      Positions x(3 * m.vertices.rows());
+      for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) x.segment<3>(3 * i) = m.vertices.row(i).transpose();
+      return x;
+    };
+    scene.initial = read_state("positions");
+    scene.initial_previous = init.has("previous") ? read_state("previous") : scene.initial;
   }
   if (cloth.has("pins")) {
     const YAML::Node pins = cloth.node("pins");
@@ -344,11 +372,11 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
     return (fs::path(out_dir) / name).string();
   };
   const auto& tris = scene.cloth.triangles;
-  if (!out_dir.empty()) write_obj(obj_path(0), scene.cloth.rest, tris);
+  if (!out_dir.empty()) write_obj(obj_path(0), scene.initial, tris);
 
   SceneRun run;
   const double h = scene.settings.time_step;
-  Positions x2 = scene.cloth.rest, x1 = scene.cloth.rest;
+  Positions x2 = scene.initial_previous, x1 = scene.initial;
   Eigen::MatrixX3d body_prev, body_now;
   if (sequence) body_prev = sim.body(0).vertices();
   for (int f = 1; f <= scene.frames; ++f) {

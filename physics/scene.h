@@ -28,6 +28,9 @@ struct Scene {
   SimulationSettings settings;
   ClothMesh cloth;
   std::vector<int> pins;
+  // The state the run starts from (cloth.initial): positions at frame 0 and one frame
+  // before it (velocity by their difference), 3n metres; both the rest shape by default.
+  Positions initial, initial_previous;
   std::vector<SceneObstacle> obstacles;
 };
 

@@ -80,6 +80,27 @@ cloth:
   material: {density: -0.1}
 )", {"cloth.material.density"});
   expect_error(R"(
+cloth:
+  grid: {size: [1, 1], resolution: [4, 4]}
+  material: {membrane: neo_hookean}
+)", {"cloth.material.membrane", "neo_hookean", "stvk or tension_field"});
+  expect_error(R"(
+cloth:
+  grid: {size: [1, 1], resolution: [4, 4]}
+  material: {compression_ratio: 2}
+)", {"cloth.material.compression_ratio", "[0, 1]"});
+  write("three.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n");
+  expect_error(R"(
+cloth:
+  grid: {size: [1, 1], resolution: [4, 4]}
+  initial: {positions: three.obj}
+)", {"cloth.initial.positions", "three.obj", "3 vertices", "16"});
+  expect_error(R"(
+cloth:
+  grid: {size: [1, 1], resolution: [4, 4]}
+  initial: {previous: three.obj}
+)", {"cloth.initial.positions", "missing key"});
+  expect_error(R"(
 cloth: {mesh: missing.obj}
 )", {"cloth.mesh", "missing.obj"});
   expect_error(R"(
@@ -162,6 +183,38 @@ solver: {max_iterations: 30, tolerance: 1.0e-4}
   const TriangleMesh last = read_obj((out / "cloth_0003.obj").string());
   EXPECT_NEAR(last.vertices(0, 1), 1.0, 1e-3);
   EXPECT_LT(last.vertices(19, 1), 1.0 - 1e-3);
+}
+
+TEST_F(SceneTest, RunStartsFromTheGivenStateAndVelocity) {
+  // Without gravity or obstacles, a cloth given at its rest shape moved up by 1 cm, and
+  // 1 cm lower one frame before, keeps rising at 0.5 m/s: it starts from that state and
+  // velocity, not from rest.
+  std::string rest_up, rest;
+  const Scene plain = load_scene(write("plain.yaml", R"(
+time_step: 0.02
+frames: 2
+gravity: [0, 0, 0]
+cloth: {grid: {size: [0.5, 0.4], resolution: [5, 4], origin: [0, 1, 0], plane: xz}}
+)"));
+  for (int i = 0; i < plain.cloth.num_vertices(); ++i) {
+    const Vec3 v = plain.cloth.rest_vertex(i);
+    rest += "v " + std::to_string(v.x()) + " " + std::to_string(v.y()) + " " + std::to_string(v.z()) + "\n";
+    rest_up += "v " + std::to_string(v.x()) + " " + std::to_string(v.y() + 0.01) + " " + std::to_string(v.z()) + "\n";
+  }
+  write("up.obj", rest_up);
+  write("at_rest.obj", rest);
+  const Scene scene = load_scene(write("scene.yaml", R"(
+time_step: 0.02
+frames: 2
+gravity: [0, 0, 0]
+cloth:
+  grid: {size: [0.5, 0.4], resolution: [5, 4], origin: [0, 1, 0], plane: xz}
+  initial: {positions: up.obj, previous: at_rest.obj}
+)"));
+  const fs::path out = dir_ / "out";
+  run_scene(scene, out.string());
+  EXPECT_NEAR(read_obj((out / "cloth_0000.obj").string()).vertices(7, 1), 1.01, 1e-6);
+  EXPECT_NEAR(read_obj((out / "cloth_0002.obj").string()).vertices(7, 1), 1.03, 1e-6);
 }
 
 TEST(SequencePath, FormatsTheFrameNumber) {
