@@ -13,7 +13,8 @@
 // a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
 // youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m), the membrane
-// model (membrane=stvk|tension_field) and its compression_ratio.
+// model (membrane=stvk|tension_field) and its compression_ratio, the obstacle's friction
+// coefficient (friction, default 0.3) and friction_velocity (m/s).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
 // exact)
 // Runs single-threaded; prints one line per frame and a median summary.
@@ -133,6 +134,7 @@ int main(int argc_all, char** argv_all) {
                                                            : CholeskyOrdering::amd;
   if (membrane != "default") s.project_membrane_hessian = membrane == "project";
   s.newton.max_iterations = 50;
+  double friction = 0.3;  // against the sphere or the body
   for (const auto& [key, value] : named) {
     if (key == "cg_max_iterations") s.newton.cg_max_iterations = std::atoi(value.c_str());
     else if (key == "cg_relative_tolerance") s.newton.cg_relative_tolerance = std::atof(value.c_str());
@@ -152,6 +154,8 @@ int main(int argc_all, char** argv_all) {
     else if (key == "membrane" && (value == "stvk" || value == "tension_field"))
       s.material.membrane = value == "stvk" ? MembraneModel::stvk : MembraneModel::tension_field;
     else if (key == "compression_ratio") s.material.compression_ratio = std::atof(value.c_str());
+    else if (key == "friction") friction = std::atof(value.c_str());
+    else if (key == "friction_velocity") s.friction_velocity = std::atof(value.c_str());
     else {
       std::fprintf(stderr, "bench_cloth_sim: unknown option '%s'\n", key.c_str());
       return 2;
@@ -166,12 +170,14 @@ int main(int argc_all, char** argv_all) {
   std::vector<int> ring;
   Eigen::MatrixX3d body_rest;
   if (skirt) {
-    sim.add_body(cylinder_body(0.15, 0.0, 1.05, 40, 64));
+    sim.add_body(cylinder_body(0.15, 0.0, 1.05, 40, 64), friction);
     body_rest = sim.body(0).vertices();
     for (int j = 0; j < n; ++j) ring.push_back(j);
     sim.set_pins(ring);
   } else {
-    sim.set_spheres({{kDrapeSphereCentre, kDrapeSphereRadius}});
+    SphereObstacle sphere{kDrapeSphereCentre, kDrapeSphereRadius};
+    sphere.friction = friction;
+    sim.set_spheres({sphere});
   }
   std::printf("scene %s solver %s vertices %d triangles %zu frames %d\n", scene.c_str(),
               solver.c_str(), mesh.num_vertices(), mesh.triangles.size(), frames);

@@ -64,7 +64,9 @@ MembraneResponse relaxed(const Eigen::Matrix2d& G, Lame l, bool derivatives) {
 // The compressive part −min(S, 0) of a symmetric 2×2 stress (zero when S ⪰ 0).
 Eigen::Matrix2d compressive_part(const Eigen::Matrix2d& S) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
-  if (eig.eigenvalues()[0] >= 0) return Eigen::Matrix2d::Zero();
+  // The relaxed stress of a wrinkled element is rank one (2k·g₁·e₁e₁ᵀ): its second
+  // eigenvalue is zero up to rounding, and is no compression.
+  if (eig.eigenvalues()[0] >= -1e-12 * std::abs(eig.eigenvalues()[1])) return Eigen::Matrix2d::Zero();
   return eig.eigenvectors() * (-eig.eigenvalues().cwiseMin(0.0)).asDiagonal() *
          eig.eigenvectors().transpose();
 }
