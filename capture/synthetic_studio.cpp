@@ -17,6 +17,7 @@
 #include "capture/bvh.h"
 #include "capture/camera.h"
 #include "capture/character.h"
+#include "capture/garment_simulator.h"
 #include "capture/motion_retarget.h"
 #include "capture/openpose.h"
 #include "capture/mesh_io.h"
@@ -66,7 +67,7 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
   if (const YAML::Node m = n["material"]) {
     y.check_keys(m, "simulation.material.",
                  {"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness", "membrane",
-                  "compression_ratio"});
+                  "compression_ratio", "min_area_ratio"});
     auto& mat = s.material;
     if (m["density"]) mat.density = y.positive(m["density"], "simulation.material.density");
     if (m["youngs_modulus"]) mat.youngs_modulus = y.positive(m["youngs_modulus"], "simulation.material.youngs_modulus");
@@ -83,6 +84,8 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
     }
     if (m["compression_ratio"])
       mat.compression_ratio = y.number(m["compression_ratio"], "simulation.material.compression_ratio", 0, 1);
+    if (m["min_area_ratio"])
+      mat.min_area_ratio = y.number(m["min_area_ratio"], "simulation.material.min_area_ratio", 0, 0.999999);
   }
   if (const YAML::Node c = n["collision"]) {
     y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});
@@ -267,18 +270,6 @@ TriangleMesh with_vertices(const TriangleMesh& mesh, const Vertices& V) {
   return out;
 }
 
-physics::Positions to_positions(const Vertices& V, double metres_per_unit) {
-  physics::Positions x(3 * V.rows());
-  for (int i = 0; i < V.rows(); ++i) x.segment<3>(3 * i) = V.row(i).transpose() * metres_per_unit;
-  return x;
-}
-
-Vertices to_vertices(const physics::Positions& x, double metres_per_unit) {
-  Vertices V(x.size() / 3, 3);
-  for (int i = 0; i < V.rows(); ++i) V.row(i) = x.segment<3>(3 * i).transpose() / metres_per_unit;
-  return V;
-}
-
 // A contact sheet (at most 4 columns, tiles of at most 256 px) with keypoints drawn (green
 // visible, orange low confidence) and mask outlines: every view of the middle frame, or
 // with fewer than 4 views (a moving camera) up to 8 frames spread over the sequence.
@@ -421,34 +412,14 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     }
   } else {
     const SynthSimulationConfig& s = cfg.simulation;
-    std::vector<std::array<int, 3>> tris(cloth_mesh.num_faces());
-    for (int i = 0; i < cloth_mesh.num_faces(); ++i)
-      tris[i] = {cloth_mesh.F(i, 0), cloth_mesh.F(i, 1), cloth_mesh.F(i, 2)};
-    physics::SimulationSettings settings;
-    settings.time_step = 1.0 / cfg.motion.fps;
-    settings.substeps = s.substeps;
-    settings.material = s.material;
-    settings.collision_thickness = s.collision_thickness;
-    settings.collision_stiffness = s.collision_stiffness;
-    settings.pin_stiffness = s.pin_stiffness;
-    settings.newton.max_iterations = s.max_iterations;
-    settings.newton.tolerance = s.tolerance;
-    physics::ClothSimulator sim(
-        physics::make_cloth_mesh(to_positions(cloth_mesh.V, mpu), tris, s.material.density), settings);
-    std::vector<std::array<int, 3>> body_faces(ch.body.mesh.num_faces());
-    for (int i = 0; i < ch.body.mesh.num_faces(); ++i)
-      body_faces[i] = {ch.body.mesh.F(i, 0), ch.body.mesh.F(i, 1), ch.body.mesh.F(i, 2)};
     auto body_metres = [&](int f) -> Eigen::MatrixX3d { return posed[f].body * mpu; };
-    sim.add_body(physics::BodyMesh(body_metres(0), body_faces, ch.inactive_body_faces));
-    std::vector<int> anchors(ch.attachment.anchors.data(), ch.attachment.anchors.data() + ch.attachment.size());
-    auto pin_targets = [&](int f) {
-      std::vector<physics::Vec3> t;
-      for (int a : anchors) t.push_back(posed[f].cloth.row(a).transpose() * mpu);
-      return t;
-    };
-    const double h = settings.time_step;
+    const std::vector<int> anchors = garment_pin_vertices(ch);
+    auto pin_targets = [&](int f) { return garment_pin_targets(ch, posed[f].cloth); };
+    const std::unique_ptr<physics::ClothSimulator> simulator =
+        make_garment_simulator(ch, s, cfg.motion.fps, body_metres(0), pin_targets(0));
+    physics::ClothSimulator& sim = *simulator;
+    const double h = sim.settings().time_step;
     physics::Positions x2 = to_positions(posed[0].cloth, mpu), x1 = x2;
-    sim.set_pins(anchors, pin_targets(0));
     Eigen::MatrixX3d body_prev = body_metres(0), body_now;
     const int total = s.settle_frames + frames - 1;
     int done = 0;

@@ -26,6 +26,8 @@ void validate(const ClothMaterial& m) {
              "cloth material: thickness must be > 0 m, got ", m.thickness);
   WEFT_CHECK(std::isfinite(m.compression_ratio) && m.compression_ratio >= 0 && m.compression_ratio <= 1,
              "cloth material: compression_ratio must be in [0, 1], got ", m.compression_ratio);
+  WEFT_CHECK(std::isfinite(m.min_area_ratio) && m.min_area_ratio >= 0 && m.min_area_ratio < 1,
+             "cloth material: min_area_ratio must be in [0, 1), got ", m.min_area_ratio);
 }
 
 ClothMesh make_cloth_mesh(const Positions& rest, std::vector<std::array<int, 3>> triangles,

@@ -30,6 +30,9 @@ struct ClothMaterial {
   MembraneModel membrane = MembraneModel::tension_field;
   // tension_field: the share of StVK's compressive energy kept, in [0, 1] (1 is StVK).
   double compression_ratio = 1e-3;
+  // tension_field: an element compressed below this area ratio (current / rest area)
+  // meets a barrier against collapse; in [0, 1), 0 for none.
+  double min_area_ratio = 0.5;
 };
 
 // Throws weft::Error naming the field if a value is non-physical.

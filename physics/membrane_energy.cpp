@@ -61,6 +61,33 @@ MembraneResponse relaxed(const Eigen::Matrix2d& G, Lame l, bool derivatives) {
   return out;
 }
 
+// The area barrier of tension_field: ψ_b = −κ (D − D₀)² ln(D/D₀) for D < D₀, with
+// D = det(FᵀF) = J² (J the area ratio, current / rest) and D₀ = J_min², zero above; C²
+// at D₀ and +∞ at a collapsed element. In γ, D = (1+2γ₀)(1+2γ₁) − 4γ₂².
+void add_area_barrier(const Eigen::Matrix2d& G, double kappa, double min_area_ratio, bool derivatives,
+                      MembraneResponse& r) {
+  const double d0 = min_area_ratio * min_area_ratio;
+  const double gamma2 = 0.5 * (G(0, 1) + G(1, 0));
+  const double D_exact = (1.0 + 2.0 * G(0, 0)) * (1.0 + 2.0 * G(1, 1)) - 4.0 * gamma2 * gamma2;
+  if (!(D_exact < d0)) return;
+  // A collapsed element (D = 0, only in a given start state) gets a large finite energy.
+  const double D = std::max(D_exact, 1e-9 * d0);
+  const double q = D - d0, l = std::log(D / d0);
+  r.psi += -kappa * q * q * l;
+  if (!derivatives) return;
+  const double b1 = -kappa * (2.0 * q * l + q * q / D);
+  const double b2 = -kappa * (2.0 * l + 4.0 * q / D - q * q / (D * D));
+  const Eigen::Vector3d dD(2.0 * (1.0 + 2.0 * G(1, 1)), 2.0 * (1.0 + 2.0 * G(0, 0)), -8.0 * gamma2);
+  Eigen::Matrix3d d2D;
+  d2D << 0, 4, 0, 4, 0, 0, 0, 0, -8;
+  const Eigen::Vector3d dpsi = b1 * dD;
+  Eigen::Matrix2d S;
+  S << dpsi[0], 0.5 * dpsi[2], 0.5 * dpsi[2], dpsi[1];
+  r.stress += S;
+  r.tangent += b2 * dD * dD.transpose() + b1 * d2D;
+  r.tangent_indefinite = true;  // b₁ ∇²D has both signs
+}
+
 // The compressive part −min(S, 0) of a symmetric 2×2 stress (zero when S ⪰ 0).
 Eigen::Matrix2d compressive_part(const Eigen::Matrix2d& S) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(S);
@@ -79,12 +106,14 @@ MembraneResponse membrane_response(const Eigen::Matrix2d& G, const ClothMaterial
   if (material.membrane == MembraneModel::stvk) return stvk(G, l, derivatives);
   MembraneResponse rel = relaxed(G, l, derivatives);
   const double rho = material.compression_ratio;
-  if (rho == 0) return rel;
-  const MembraneResponse full = stvk(G, l, derivatives);
-  // ψ_rel ≤ ψ_stvk, equal where taut: the blend changes only the compressed response.
-  rel.psi += rho * (full.psi - rel.psi);
-  rel.stress += rho * (full.stress - rel.stress);
-  rel.tangent += rho * (full.tangent - rel.tangent);
+  if (rho != 0) {
+    const MembraneResponse full = stvk(G, l, derivatives);
+    // ψ_rel ≤ ψ_stvk, equal where taut: the blend changes only the compressed response.
+    rel.psi += rho * (full.psi - rel.psi);
+    rel.stress += rho * (full.stress - rel.stress);
+    rel.tangent += rho * (full.tangent - rel.tangent);
+  }
+  if (material.min_area_ratio > 0) add_area_barrier(G, l.mu, material.min_area_ratio, derivatives, rel);
   return rel;
 }
 
@@ -119,6 +148,44 @@ Mat32 MembraneEnergy::deformation_gradient(const Element& el, const Eigen::Vecto
   return F;
 }
 
+Eigen::Matrix<double, 9, 9> MembraneEnergy::element_hessian(const Element& el, const Mat32& F,
+                                                             const Eigen::Matrix2d& S,
+                                                             const Eigen::Matrix3d& tangent) const {
+  // d²ψ/dF²[dF] = dF S + F dS, dS = C[dG]. The second part is PSD whenever the tangent
+  // C is (⟨dF, F dS⟩ = dγᵀ C dγ); the geometric term dF S is indefinite where S has a
+  // compressive (negative) eigenvalue. Linear in (S, C).
+  Eigen::Matrix<double, 6, 6> hf;
+  for (int k = 0; k < 6; ++k) {
+    Mat32 dF = Mat32::Zero();
+    dF(k % 3, k / 3) = 1.0;
+    const Eigen::Matrix2d FtdF = F.transpose() * dF;
+    const Eigen::Matrix2d dG = 0.5 * (FtdF + FtdF.transpose());
+    const Eigen::Vector3d ds = tangent * Eigen::Vector3d(dG(0, 0), dG(1, 1), dG(0, 1));
+    Eigen::Matrix2d dS;
+    dS << ds[0], 0.5 * ds[2], 0.5 * ds[2], ds[1];
+    const Mat32 dP = dF * S + F * dS;
+    hf.col(k) = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(dP.data());
+  }
+  hf = 0.5 * (hf + hf.transpose()).eval();
+  Eigen::Matrix<double, 9, 9> hx;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      Eigen::Matrix3d blk = Eigen::Matrix3d::Zero();
+      for (int c = 0; c < 2; ++c)
+        for (int d = 0; d < 2; ++d) blk += el.beta(a, c) * el.beta(b, d) * hf.block<3, 3>(3 * c, 3 * d);
+      hx.block<3, 3>(3 * a, 3 * b) = el.weight * blk;
+    }
+  return hx;
+}
+
+namespace {
+// The PSD part of a symmetric 3×3 tangent (eigenvalues clamped at zero).
+Eigen::Matrix3d psd_part(const Eigen::Matrix3d& C) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+}
+}  // namespace
+
 bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHessian& c) const {
   if (project_hessian_) return false;
   const Eigen::Matrix2d I = Eigen::Matrix2d::Identity();
@@ -126,14 +193,14 @@ bool MembraneEnergy::add_hessian_correction(const Eigen::VectorXd& x, SparseHess
   for (const auto& el : elements_) {
     const Mat32 F = deformation_gradient(el, x);
     const Eigen::Matrix2d G = 0.5 * (F.transpose() * F - I);
-    const Eigen::Matrix2d s_neg = compressive_part(membrane_response(G, material_).stress);
-    if (s_neg.isZero(0.0)) continue;  // S ⪰ 0: the exact element Hessian is PSD
+    const MembraneResponse resp = membrane_response(G, material_);
+    const Eigen::Matrix2d s_neg = compressive_part(resp.stress);
+    const Eigen::Matrix3d c_fix = resp.tangent_indefinite ? Eigen::Matrix3d(psd_part(resp.tangent) - resp.tangent)
+                                                          : Eigen::Matrix3d::Zero();
+    if (s_neg.isZero(0.0) && c_fix.isZero(0.0)) continue;  // the exact element Hessian is PSD
     any = true;
-    const Eigen::Matrix3d w = el.weight * el.beta * s_neg * el.beta.transpose();
-    Eigen::Matrix<double, 9, 9> hx = Eigen::Matrix<double, 9, 9>::Zero();
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) hx.block<3, 3>(3 * a, 3 * b).diagonal().setConstant(w(a, b));
-    c.add<3>(el.v, hx);
+    // Projected minus exact: the Hessian is linear in (S, C).
+    c.add<3>(el.v, element_hessian(el, F, s_neg, c_fix));
   }
   return any;
 }
@@ -155,37 +222,14 @@ double MembraneEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
       for (int a = 0; a < 3; ++a) g->segment<3>(3 * el.v[a]) += P * el.beta.row(a).transpose();
     }
     if (H) {
-      // d²ψ/dF²[dF] = dF S + F dS, dS = C[dG]. The second part is PSD whenever the tangent
-      // C is (⟨dF, F dS⟩ = dγᵀ C dγ), which holds for both models; only the geometric term
-      // dF S is indefinite, where S has a compressive (negative) eigenvalue. The
-      // projection clamps those eigenvalues of S, which makes the element Hessian PSD by
-      // construction and leaves it exact where S ⪰ 0.
-      Eigen::Matrix2d S_used = S;
-      if (project_hessian_) S_used += compressive_part(S);
-      Eigen::Matrix<double, 6, 6> hf;
-      for (int k = 0; k < 6; ++k) {
-        Mat32 dF = Mat32::Zero();
-        dF(k % 3, k / 3) = 1.0;
-        const Eigen::Matrix2d FtdF = F.transpose() * dF;
-        const Eigen::Matrix2d dG = 0.5 * (FtdF + FtdF.transpose());
-        const Eigen::Vector3d dgamma(dG(0, 0), dG(1, 1), dG(0, 1));
-        const Eigen::Vector3d ds = resp.tangent * dgamma;
-        Eigen::Matrix2d dS;
-        dS << ds[0], 0.5 * ds[2], 0.5 * ds[2], ds[1];
-        const Mat32 dP = dF * S_used + F * dS;
-        hf.col(k) = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(dP.data());
-      }
-      hf = 0.5 * (hf + hf.transpose()).eval();
-      Eigen::Matrix<double, 9, 9> hx;
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) {
-          Eigen::Matrix3d blk = Eigen::Matrix3d::Zero();
-          for (int c = 0; c < 2; ++c)
-            for (int d = 0; d < 2; ++d)
-              blk += el.beta(a, c) * el.beta(b, d) * hf.block<3, 3>(3 * c, 3 * d);
-          hx.block<3, 3>(3 * a, 3 * b) = el.weight * blk;
-        }
-      H->add<3>(el.v, hx);
+      // The projection clamps the compressive eigenvalues of S (and, where the area
+      // barrier acts, the tangent's negative ones), which makes the element Hessian PSD by
+      // construction and leaves it exact where S ⪰ 0 and C ⪰ 0.
+      if (project_hessian_)
+        H->add<3>(el.v, element_hessian(el, F, S + compressive_part(S),
+                                        resp.tangent_indefinite ? psd_part(resp.tangent) : resp.tangent));
+      else
+        H->add<3>(el.v, element_hessian(el, F, S, resp.tangent));
     }
   }
   return energy;

@@ -18,6 +18,12 @@
 //   (its Hessian jumps). Its stress S_rel is positive semi-definite and its tangent in G is
 //   PSD, so its element Hessian is PSD without projection; only ρ·ψ_stvk adds an
 //   indefinite geometric term, which the projection clamps as for StVK.
+//   Free compression lets an element collapse to a line, where the bending energy's
+//   gradient (∝ 1/height) blows up and Newton stalls (measured: the 1k drape with ρ ≤ 1e-3
+//   lost frames at a residual of 1e9 of a vertex's weight). So below an area ratio
+//   J = A/Ā of min_area_ratio, a barrier ψ_b = −μ (D − D₀)² ln(D/D₀), D = J², D₀ = J_min²,
+//   resists further collapse: zero and C² at J_min, +∞ at J = 0. Its geometric term and
+//   tangent are clamped by the projection.
 //
 // With the projection on, the element Hessian is made PSD by clamping the compressive
 // eigenvalues of the stress S in its geometric term (exact wherever S ⪰ 0); with it off
@@ -36,6 +42,7 @@ struct MembraneResponse {
   double psi = 0;
   Eigen::Matrix2d stress = Eigen::Matrix2d::Zero();
   Eigen::Matrix3d tangent = Eigen::Matrix3d::Zero();
+  bool tangent_indefinite = false;  // true where the area barrier acts (the tangent may be indefinite)
 };
 MembraneResponse membrane_response(const Eigen::Matrix2d& G, const ClothMaterial& material,
                                    bool derivatives = true);
@@ -57,6 +64,9 @@ class MembraneEnergy : public Energy {
     double weight;                     // rest area × thickness, m³
   };
   Eigen::Matrix<double, 3, 2> deformation_gradient(const Element& el, const Eigen::VectorXd& x) const;
+  // The 9×9 element Hessian for stress S and tangent C (exact for the response's own).
+  Eigen::Matrix<double, 9, 9> element_hessian(const Element& el, const Eigen::Matrix<double, 3, 2>& F,
+                                              const Eigen::Matrix2d& S, const Eigen::Matrix3d& tangent) const;
   std::vector<Element> elements_;
   ClothMaterial material_;
 };

@@ -161,7 +161,7 @@ Scene load_scene(const std::string& path) {
   if (cloth.has("material")) {
     Section mat(cloth.node("material"), path, "cloth.material");
     mat.allow({"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness",
-               "membrane", "compression_ratio"});
+               "membrane", "compression_ratio", "min_area_ratio"});
     ClothMaterial& m = s.material;
     m.density = mat.number_or("density", m.density);
     WEFT_CHECK(m.density > 0, path, ": 'cloth.material.density' must be > 0 kg/m², got ", m.density);
@@ -182,6 +182,9 @@ Scene load_scene(const std::string& path) {
     m.compression_ratio = mat.number_or("compression_ratio", m.compression_ratio);
     WEFT_CHECK(std::isfinite(m.compression_ratio) && m.compression_ratio >= 0 && m.compression_ratio <= 1,
                path, ": 'cloth.material.compression_ratio' must be in [0, 1], got ", m.compression_ratio);
+    m.min_area_ratio = mat.number_or("min_area_ratio", m.min_area_ratio);
+    WEFT_CHECK(std::isfinite(m.min_area_ratio) && m.min_area_ratio >= 0 && m.min_area_ratio < 1, path,
+               ": 'cloth.material.min_area_ratio' must be in [0, 1), got ", m.min_area_ratio);
   }
   s.pin_stiffness = cloth.positive("pin_stiffness", s.pin_stiffness);
   WEFT_CHECK(cloth.has("grid") != cloth.has("mesh"), path,

@@ -161,6 +161,35 @@ TEST(Energies, TensionFieldCompressionCostsOnlyTheRatioOfStvk) {
   EXPECT_LE((g_tf - g_stvk).norm(), 1e-12 * g_stvk.norm());
 }
 
+TEST(Energies, TensionFieldAreaBarrierResistsCollapse) {
+  // Below min_area_ratio the element meets a barrier: none at 0.55 of the area, a rising
+  // energy and an outward force as the area shrinks to 0.45, 0.3, 0.1, a large finite one
+  // at full collapse; its derivatives match finite differences, its projection is PSD.
+  const ClothMesh mesh = one_triangle();
+  ClothMaterial m = material();
+  m.membrane = MembraneModel::tension_field;
+  m.compression_ratio = 0;
+  m.min_area_ratio = 0.5;
+  MembraneEnergy e(mesh, m);
+  EXPECT_EQ(e.evaluate(deformed_triangle((Eigen::Matrix2d() << 1.0, 0, 0, 0.55).finished()), nullptr, nullptr), 0.0);
+  double last = 0;
+  for (double area : {0.45, 0.3, 0.1, 0.01}) {
+    SCOPED_TRACE("area ratio " + std::to_string(area));
+    const Positions x = deformed_triangle((Eigen::Matrix2d() << 1.0, 0.05, 0, area).finished());
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(9);
+    const double w = e.evaluate(x, &g, nullptr);
+    EXPECT_GT(w, last);
+    last = w;
+    // The force −g on the vertex across the squeezed (z) leg pushes it outward (+z).
+    EXPECT_GT(-g[3 * 2 + 2], 0.0);
+    if (area >= 0.1) testing::expect_derivatives_match(e, deformed_triangle((Eigen::Matrix2d() << 1.0, 0.05, 0, area).finished(), 0.002), 1e-5);
+  }
+  const Positions collapsed = deformed_triangle((Eigen::Matrix2d() << 1.0, 1.0, 0, 0).finished());
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(9);
+  EXPECT_TRUE(std::isfinite(e.evaluate(collapsed, &g, nullptr)));
+  EXPECT_TRUE(g.allFinite());
+}
+
 TEST(Energies, TensionFieldUniaxialTensionContractsFreely) {
   // Stretched by s along x and held at any width below the free Poisson contraction
   // (g_z < −ν g_x; 0.968 of the width at s = 1.1): the
