@@ -13,7 +13,7 @@
 // a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
 // youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m), the membrane
-// model (membrane=stvk|tension_field) and its compression_ratio, the obstacle's friction
+// model (membrane=stvk|tension_field) with its compression_ratio and min_area_ratio, the obstacle's friction
 // coefficient (friction, default 0.3) and friction_velocity (m/s).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
 // exact)
@@ -154,6 +154,7 @@ int main(int argc_all, char** argv_all) {
     else if (key == "membrane" && (value == "stvk" || value == "tension_field"))
       s.material.membrane = value == "stvk" ? MembraneModel::stvk : MembraneModel::tension_field;
     else if (key == "compression_ratio") s.material.compression_ratio = std::atof(value.c_str());
+    else if (key == "min_area_ratio") s.material.min_area_ratio = std::atof(value.c_str());
     else if (key == "friction") friction = std::atof(value.c_str());
     else if (key == "friction_velocity") s.friction_velocity = std::atof(value.c_str());
     else {
@@ -213,8 +214,8 @@ int main(int argc_all, char** argv_all) {
       chord_steps += r.chord_steps;
       failed += r.status != StepStatus::converged;
       lin += r.linear_solve_ms;
-      coll += r.energy_ms.back();  // the collision energy is last
-      for (size_t k = 0; k + 1 < r.energy_ms.size(); ++k) energy += r.energy_ms[k];
+      for (size_t k = 0; k < r.energy_ms.size(); ++k)
+        (sim.solver().energies()[k]->name() == "collision" ? coll : energy) += r.energy_ms[k];
       total += r.total_ms;
     }
     frame_ms.push_back(ms_since(t0));
@@ -236,6 +237,18 @@ int main(int argc_all, char** argv_all) {
   };
   double mean_it = 0;
   for (double i : iters) mean_it += i / iters.size();
+  if (!skirt) {
+    // Is the cloth still draped on the sphere? The highest vertex should sit on its top
+    // (centre height + radius + about the collision band), and many vertices in contact.
+    double top = -1e9;
+    int touching = 0;
+    for (Eigen::Index i = 0; i < x.size() / 3; ++i) {
+      top = std::max(top, x[3 * i + 1]);
+      touching += (x.segment<3>(3 * i) - kDrapeSphereCentre).norm() - kDrapeSphereRadius < 2 * s.collision_thickness;
+    }
+    std::printf("drape after %.2f s: highest vertex at y = %.4f m (sphere top %.4f m), %d vertices within 2 bands of the sphere\n",
+                2 * frames * s.time_step, top, kDrapeSphereCentre.y() + kDrapeSphereRadius, touching);
+  }
   std::printf(
       "SUMMARY scene=%s solver=%s vertices=%d median_frame_ms=%.1f median_frame_cpu_ms=%.1f "
       "median_newton_per_frame=%.0f mean_newton_per_frame=%.1f "

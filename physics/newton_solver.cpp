@@ -254,17 +254,36 @@ void NewtonSolver::print_trace(int it, const Eigen::VectorXd& x, const Eigen::Ve
     std::snprintf(buf, sizeof buf, " %s %.3g", en->name().c_str(), r);
     shares += buf;
   }
+  // Where the full (filtered) step met more curvature than the quadratic model: per energy,
+  // its change along α₀·d minus the linear prediction α₀·∇E_k·d, against the model's total
+  // ½α₀²·dᵀHd. Only for iterations that back-tracked.
+  std::string curvature;
+  if (t.backtracks > 0) {
+    const double a0 = t.filter;
+    const Eigen::VectorXd x_full = x + a0 * d;
+    const SparseHessian& hm = exact_differs_ ? exact_hessian_ : hessian_;
+    std::snprintf(buf, sizeof buf, " | full step %.3g: model %.3e;", a0, 0.5 * a0 * a0 * d.dot(hm.multiply(d)));
+    curvature = buf;
+    for (const Energy* en : energies_) {
+      Eigen::VectorXd ge = Eigen::VectorXd::Zero(3 * n_);
+      const double e0 = en->evaluate(x, &ge, nullptr);
+      const double c = en->evaluate(x_full, nullptr, nullptr) - e0 - a0 * ge.dot(d);
+      if (std::abs(c) < 1e-12) continue;
+      std::snprintf(buf, sizeof buf, " %s %.3e", en->name().c_str(), c);
+      curvature += buf;
+    }
+  }
   static const char* outcomes[] = {"converged", "negative_curvature", "too_slow"};
   std::fprintf(stderr,
                "it %d E %.12g res %.3e |d| %.2e filter %.3g alpha %g backtracks %d doublings %d "
                "curvature_step %.2e decrease %.3e predicted %.3e ratio %.3f cg %d %s delta %.2e "
-               "fact %d corr %d worst v%d |dx| %.2e m:%s\n",
+               "fact %d corr %d worst v%d |dx| %.2e m:%s%s\n",
                it, e, worst_r, d.lpNorm<Eigen::Infinity>(), t.filter, alpha, t.backtracks,
                t.expansions, t.curvature_step, actual, predicted,
                predicted != 0 ? actual / predicted : 0.0, report.cg_iterations - t.cg_before,
                exact_differs_ ? outcomes[static_cast<int>(last_cg_outcome_)] : "none", delta_,
                report.factorizations, report.corrections, worst, step.segment<3>(3 * worst).norm(),
-               shares.c_str());
+               shares.c_str(), curvature.c_str());
 }
 
 NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
