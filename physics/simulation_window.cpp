@@ -11,10 +11,16 @@ std::vector<StepResult> simulate_window(ClothSimulator& sim, const SimulationWin
   WEFT_CHECK(w.body.empty() || static_cast<int>(w.body.size()) == w.frames + 1,
              "simulation window: ", w.body.size(), " body frames given, expected ", w.frames + 1,
              " (the start frame and each simulated frame)");
+  WEFT_CHECK(w.pin_targets.empty() || static_cast<int>(w.pin_targets.size()) == w.frames,
+             "simulation window: ", w.pin_targets.size(), " frames of pin targets given, expected ", w.frames);
+  for (const auto& t : w.pin_targets)
+    WEFT_CHECK(t.size() == w.pin_vertices.size(), "simulation window: ", t.size(), " pin targets for ",
+               w.pin_vertices.size(), " pinned vertices");
   std::vector<StepResult> results;
   results.reserve(w.frames);
   Positions x2 = w.x_prev2, x1 = w.x_prev;
   for (int f = 0; f < w.frames; ++f) {
+    if (!w.pin_targets.empty()) sim.set_pins(w.pin_vertices, w.pin_targets[f]);
     StepResult r = w.body.empty() ? sim.step(x2, x1)
                                   : sim.step(x2, x1, &w.body[f], &w.body[f + 1]);
     x2 = std::move(x1);

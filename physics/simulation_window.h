@@ -17,6 +17,12 @@ struct SimulationWindow {
   // Body 0's vertices at the frame of x_prev and at each of the `frames` frames after it
   // (frames + 1 entries), or empty for static obstacles.
   std::vector<Eigen::MatrixX3d> body;
+  // Pins that move with the body (a garment's waistband following the skin): the pinned
+  // vertices and their targets (m) at each simulated frame (`frames` entries of
+  // pin_vertices.size() targets), set before each frame's step. Empty: the simulator's
+  // pins as configured.
+  std::vector<int> pin_vertices;
+  std::vector<std::vector<Vec3>> pin_targets;
   int frames = 1;
 };
 
