@@ -8,13 +8,12 @@
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1),
-// precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_expansions,
-// chord_steps, chord_progress, max_iterations (per step; 1 = one linear solve per step, as
-// a linearised implicit Euler like ARCSim's);
+// precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_iterations (per
+// step; 1 = one linear solve per step, as a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
 // youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m), the membrane
-// model (membrane=stvk|tension_field) with its compression_ratio and min_area_ratio, the obstacle's friction
-// coefficient (friction, default 0.3) and friction_velocity (m/s).
+// model (membrane=stvk|tension_field) with its compression_ratio and min_area_ratio, the
+// obstacle's friction coefficient (friction, default 0.3) and friction_velocity (m/s).
 // (N×N vertices; TOLERANCE relative to the vertex weight; membrane Hessian projected or
 // exact)
 // Runs single-threaded; prints one line per frame and a median summary.
@@ -142,9 +141,6 @@ int main(int argc_all, char** argv_all) {
       s.newton.precondition_exact_hessian = value != "0";
     else if (key == "negative_curvature_search")
       s.newton.negative_curvature_search = value != "0";
-    else if (key == "chord_steps") s.newton.chord_steps = std::atoi(value.c_str());
-    else if (key == "chord_progress") s.newton.chord_progress = std::atof(value.c_str());
-    else if (key == "max_expansions") s.newton.max_expansions = std::atoi(value.c_str());
     else if (key == "max_iterations") s.newton.max_iterations = std::atoi(value.c_str());
     else if (key == "bending_stiffness") s.material.bending_stiffness = std::atof(value.c_str());
     else if (key == "youngs_modulus") s.material.youngs_modulus = std::atof(value.c_str());
@@ -189,7 +185,7 @@ int main(int argc_all, char** argv_all) {
   std::vector<double> frame_ms, frame_cpu_ms, iters, residuals;
   double lin = 0, coll = 0, energy = 0, total = 0;
   int failed = 0;
-  long factorizations = 0, cg_iterations = 0, chord_steps = 0;
+  long factorizations = 0, cg_iterations = 0;
   for (int f = 0; f < frames; ++f) {
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = cpu_ms();
@@ -211,7 +207,6 @@ int main(int argc_all, char** argv_all) {
       residual = std::max(residual, r.residual);
       factorizations += r.factorizations;
       cg_iterations += r.cg_iterations;
-      chord_steps += r.chord_steps;
       failed += r.status != StepStatus::converged;
       lin += r.linear_solve_ms;
       for (size_t k = 0; k < r.energy_ms.size(); ++k)
@@ -252,11 +247,11 @@ int main(int argc_all, char** argv_all) {
   std::printf(
       "SUMMARY scene=%s solver=%s vertices=%d median_frame_ms=%.1f median_frame_cpu_ms=%.1f "
       "median_newton_per_frame=%.0f mean_newton_per_frame=%.1f "
-      "factorizations_per_frame=%.1f cg_per_frame=%.1f chord_steps_per_frame=%.1f "
+      "factorizations_per_frame=%.1f cg_per_frame=%.1f "
       "linear_solve=%.0f%% collision=%.0f%% energies_assembly=%.0f%% non_converged_steps=%d "
       "median_residual=%.2g max_residual=%.2g\n",
       scene.c_str(), solver.c_str(), mesh.num_vertices(), median(frame_ms), median(frame_cpu_ms),
-      median(iters), mean_it, double(factorizations) / frames, double(cg_iterations) / frames, double(chord_steps) / frames,
+      median(iters), mean_it, double(factorizations) / frames, double(cg_iterations) / frames,
       100 * lin / total, 100 * coll / total, 100 * energy / total, failed, median(residuals),
       *std::max_element(residuals.begin(), residuals.end()));
   return 0;

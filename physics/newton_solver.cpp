@@ -275,11 +275,11 @@ void NewtonSolver::print_trace(int it, const Eigen::VectorXd& x, const Eigen::Ve
   }
   static const char* outcomes[] = {"converged", "negative_curvature", "too_slow"};
   std::fprintf(stderr,
-               "it %d E %.12g res %.3e |d| %.2e filter %.3g alpha %g backtracks %d doublings %d "
+               "it %d E %.12g res %.3e |d| %.2e filter %.3g alpha %g backtracks %d "
                "curvature_step %.2e decrease %.3e predicted %.3e ratio %.3f cg %d %s delta %.2e "
                "fact %d corr %d worst v%d |dx| %.2e m:%s%s\n",
                it, e, worst_r, d.lpNorm<Eigen::Infinity>(), t.filter, alpha, t.backtracks,
-               t.expansions, t.curvature_step, actual, predicted,
+               t.curvature_step, actual, predicted,
                predicted != 0 ? actual / predicted : 0.0, report.cg_iterations - t.cg_before,
                exact_differs_ ? outcomes[static_cast<int>(last_cg_outcome_)] : "none", delta_,
                report.factorizations, report.corrections, worst, step.segment<3>(3 * worst).norm(),
@@ -328,7 +328,6 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
       double alpha = max_step(x, d);
       trace.filter = alpha;
       trace.backtracks = 0;
-      trace.expansions = 0;
       double e_accept = 0;
       for (int b = 0; b < options_.max_backtracks; ++b, alpha *= 0.5, ++trace.backtracks) {
         x_new = x + alpha * d;
@@ -337,24 +336,6 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
           accepted = true;
           e_accept = e_new;
           break;
-        }
-      }
-      if (accepted && alpha == 1.0) {
-        // The full step was accepted: try doubling it while the energy keeps falling. On a
-        // buckling cloth the iterate leaves a saddle along modes whose negative curvature
-        // the PSD fallback Hessian ignores, and the Newton step there is far too short
-        // (measured on the 1k drape, 10 frames: 42 -> 36 Newton iterations per frame).
-        // Energy evaluations are cheap next to a factorisation.
-        for (int k = 0; k < options_.max_expansions; ++k) {
-          const double a2 = 2.0 * alpha;
-          if (max_step(x, a2 * d) < 1.0) break;
-          x_trial = x + a2 * d;
-          const double e2 = evaluate(x_trial, nullptr, nullptr, &report.energy_ms);
-          if (!(std::isfinite(e2) && e2 < e_accept && e2 <= e + options_.armijo * a2 * slope)) break;
-          alpha = a2;
-          e_accept = e2;
-          x_new.swap(x_trial);
-          ++trace.expansions;
         }
       }
       if (accepted && options_.negative_curvature_search &&
@@ -379,33 +360,6 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     e = e_new;
     report.accepted_energies.push_back(e);
     report.iterations = it + 1;
-    // Chord steps: further descent steps with this iteration's factor, d = −M⁻¹∇E (a solve,
-    // no factorisation), while they keep lowering the energy and the residual.
-    for (int k = 0; k < options_.chord_steps && cholmod_->has_factor(); ++k) {
-      const double r0 = residual(g);
-      if (r0 <= options_.tolerance) break;
-      d = cholmod_->solve(-g);
-      const double slope = g.dot(d);
-      if (!d.allFinite() || !(slope < 0)) break;
-      double alpha = max_step(x, d);
-      bool ok = false;
-      double e_c = 0;
-      for (int b = 0; b < 6 && !ok; ++b, alpha *= 0.5) {
-        x_new = x + alpha * d;
-        e_c = evaluate(x_new, nullptr, nullptr, &report.energy_ms);
-        ok = std::isfinite(e_c) && e_c <= e + options_.armijo * alpha * slope;
-      }
-      if (!ok) break;
-      e_c = evaluate(x_new, &g_new, nullptr, &report.energy_ms);
-      if (!std::isfinite(e_c) || !g_new.allFinite()) break;
-      const double r1 = residual(g_new);
-      x.swap(x_new);
-      g.swap(g_new);
-      e = e_c;
-      report.accepted_energies.push_back(e);
-      ++report.chord_steps;
-      if (!(r1 < options_.chord_progress * r0)) break;
-    }
     delta_ = delta_ <= delta_floor_ ? 0.0 : 0.1 * delta_;
   }
   if (residual(g) <= options_.tolerance) return finish(StepStatus::converged);

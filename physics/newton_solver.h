@@ -6,9 +6,8 @@
 // curvature), then adaptive regularisation H + δI (δ grows when
 // the factorisation fails, the direction is not a descent direction or the line search
 // fails, and shrinks after a success); a step filter (Energy::max_step), an Armijo
-// back-tracking line search and doubling of accepted full steps, then a search along CG's
-// direction of negative curvature when it met one (and, optionally, chord steps with the
-// same factor). Converged when every
+// back-tracking line search, then a search along CG's direction of negative curvature
+// when it met one. Converged when every
 // vertex's residual is below the tolerance relative to its force scale. The solver never
 // leaves x non-finite: a failed iteration keeps the last accepted iterate, which has the
 // lowest energy reached.
@@ -42,7 +41,6 @@ struct NewtonOptions {
   double tolerance = 1e-3;
   double armijo = 1e-4;        // sufficient-decrease constant
   int max_backtracks = 40;
-  int max_expansions = 6;      // doublings of an accepted full step (α up to 2^6)
   LinearSolverKind linear_solver = LinearSolverKind::direct;
   CholeskyKind cholesky = CholeskyKind::automatic;  // CHOLMOD's choice by flop count
   // Nested dissection by METIS: 16 % fewer flops per factorisation than AMD at 4k
@@ -59,13 +57,6 @@ struct NewtonOptions {
   // direct: when CG stopped at non-positive curvature, also search along that direction
   // from the accepted point (energy evaluations only; see search_negative_curvature).
   bool negative_curvature_search = true;
-  // direct: after each Newton iteration, up to chord_steps further steps −M⁻¹∇E with the
-  // same factor M (a solve each, no factorisation), Armijo back-tracking, stopped when the
-  // residual falls by less than the factor chord_progress. Off by default: on the drape
-  // 30 % fewer factorisations at 4k and 16k, but more cpu at 1k and 4k (+12 %), less only
-  // at 16k (−6 %) (docs/BENCHMARKS.md).
-  int chord_steps = 0;
-  double chord_progress = 1.0;
 };
 
 struct NewtonReport {
@@ -78,7 +69,6 @@ struct NewtonReport {
   int corrections = 0;        // iterations that fell back to PSD-projected element Hessians
   int cg_iterations = 0;
   int curvature_steps = 0;    // iterations that also moved along negative curvature
-  int chord_steps = 0;        // steps with an earlier iteration's factor (chord_steps option)
   double regularization = 0;  // δ after the step, N/m
   std::vector<double> accepted_energies;  // E after each accepted iteration (first: start)
   // Wall time split, milliseconds: energies' evaluate (by energy, values and derivatives),
@@ -132,7 +122,7 @@ class NewtonSolver {
                                    NewtonReport& report) const;
   struct IterationTrace {
     double filter = 1.0;       // the step filter's cap on α
-    int backtracks = 0, expansions = 0;
+    int backtracks = 0;
     double curvature_step = 0;  // m, from search_negative_curvature
     int cg_before = 0;
   };
