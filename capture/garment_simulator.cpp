@@ -54,7 +54,7 @@ std::unique_ptr<physics::ClothSimulator> make_garment_simulator(const Character&
   std::vector<std::array<int, 3>> body_faces(ch.body.mesh.num_faces());
   for (int i = 0; i < ch.body.mesh.num_faces(); ++i)
     body_faces[i] = {ch.body.mesh.F(i, 0), ch.body.mesh.F(i, 1), ch.body.mesh.F(i, 2)};
-  sim->add_body(physics::BodyMesh(body_metres, body_faces, ch.inactive_body_faces));
+  sim->add_body(physics::BodyMesh(body_metres, body_faces, ch.inactive_body_faces), s.friction);
   sim->set_pins(garment_pin_vertices(ch), pin_targets);
   return sim;
 }

@@ -59,7 +59,8 @@ void parse_motion(const StrictYaml& y, const YAML::Node& n, SynthMotionConfig& m
 
 void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationConfig& s) {
   y.check_keys(n, "simulation.", {"enabled", "substeps", "settle_frames", "material", "collision", "pins", "solver",
-                                  "max_penetration"});
+                                  "max_penetration", "friction"});
+  if (n["friction"]) s.friction = y.number(n["friction"], "simulation.friction", 0, 10);
   if (n["enabled"]) s.enabled = y.get<bool>(n["enabled"], "simulation.enabled", "true or false");
   if (n["substeps"]) s.substeps = static_cast<int>(y.number(n["substeps"], "simulation.substeps", 1, 100));
   if (n["settle_frames"])

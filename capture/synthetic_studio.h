@@ -41,6 +41,7 @@ struct SynthSimulationConfig {
   double collision_thickness = 0.004;  // m
   double collision_stiffness = 1.0e4;  // N/m
   double pin_stiffness = 1.0e4;        // N/m
+  double friction = 0.3;               // Coulomb coefficient of the garment on the body (skin)
   int max_iterations = 50;
   double tolerance = 1e-3;             // relative to each vertex's weight
   double max_penetration = 0.01;       // m: a frame deeper than this counts as failed

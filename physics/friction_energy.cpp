@@ -79,9 +79,11 @@ void FrictionEnergy::lag(const Eigen::VectorXd& x_start, double body_motion_scal
     for (size_t b = 0; b < bodies.size(); ++b) {
       if (!(body_friction_[b] > 0)) continue;
       const BodyMesh& body = *bodies[b];
+      // The body has already moved to the step's end: query it there (within reach of the
+      // band plus its motion), then take the distance back to the step's start.
       const ClosestPoint c = body.closest_point(xi);
-      const DistanceSample s = signed_distance(c, xi);
-      if (!(s.distance < delta)) continue;
+      if (c.face < 0) continue;
+      DistanceSample s = signed_distance(c, xi);
       // The surface point under the vertex moved with its face: barycentric weights of the
       // closest point on the face now, applied to the face vertices' displacement.
       const auto& f = body.faces()[c.face];
@@ -91,7 +93,16 @@ void FrictionEnergy::lag(const Eigen::VectorXd& x_start, double body_motion_scal
                                             v.row(f[1]).transpose(), v.row(f[2]).transpose());
       Eigen::Vector3d motion = Eigen::Vector3d::Zero();
       for (int k = 0; k < 3; ++k) motion += w[k] * (v.row(f[k]) - v0.row(f[k])).transpose();
-      add_contact(i, xi, s, body_friction_[b], body_motion_scale * motion);
+      motion *= body_motion_scale;
+      // Lagged means at the start of the step: the normal force of x_n against the body as
+      // it was then. The surface has since moved by `motion`, so x_n's distance then was
+      // d_now + n·motion. Against the moved body instead, a body stepping into the cloth
+      // put x_n centimetres deep, and its penalty force (hundreds of newtons against a
+      // weight of 1e-4 N) became the friction bound: the skirt on the walking body then
+      // stalled at the iteration cap from the first frame.
+      s.distance += s.gradient.dot(motion);
+      if (!(s.distance < delta)) continue;
+      add_contact(i, xi, s, body_friction_[b], motion);
     }
   }
 }

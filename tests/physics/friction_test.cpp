@@ -123,6 +123,35 @@ TEST(Friction, ACubeMovingWithTheVertexExertsNoForce) {
   EXPECT_LT(g.dot(Vec3(0.01, 0, -0.02)), 0.0);  // the force −g points along the motion
 }
 
+TEST(Friction, TheNormalForceIsLaggedAgainstTheBodyAtTheStepStart) {
+  // The body moves toward the vertex during the step (the simulator moves it before the
+  // step): at the step's start the vertex rested 3 cm above the face (its distance then),
+  // now the moved face is 1 cm from it. The friction bound μλ is the normal force of the
+  // start, not the moved body's much larger one, and a vertex that was outside the band
+  // at the start gets no friction.
+  BodyMesh box = testing::cube(Vec3(0, 0, 0), 0.5);
+  Eigen::MatrixX3d moved = box.vertices();
+  moved.rowwise() += Eigen::RowVector3d(0.0, 0.02, 0.0);
+  box.set_vertices(moved);
+  CollisionEnergy collision(2, kDelta, kStiffness);
+  collision.set_bodies({&box});
+  FrictionEnergy friction(2, collision, kVelocity, kStep);
+  const double mu = 0.5;
+  friction.set_body_friction({mu});
+  Eigen::VectorXd x0(6);
+  x0 << 0.1, 0.53, 0.2,    // 3 cm above the top face at the start, 1 cm now
+      -0.1, 0.565, 0.0;    // 6.5 cm at the start (outside the 5 cm band), 4.5 cm now
+  friction.begin_step(x0);
+  ASSERT_EQ(friction.num_contacts(), 1);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd x = x0;
+  x[0] += 10 * friction.smoothing();  // sliding, relative to the face that moved along y only
+  friction.evaluate(x, &g, nullptr);
+  EXPECT_NEAR(g.head<3>().norm(), mu * collision.normal_force(0.03), 1e-9 * mu * collision.normal_force(0.03));
+  EXPECT_GT(collision.normal_force(0.01), 1.5 * collision.normal_force(0.03));
+  EXPECT_EQ(g.tail<3>().norm(), 0.0);
+}
+
 // ---- Whole simulations ----
 
 SimulationSettings sim_settings(double h) {
