@@ -33,6 +33,13 @@ Eigen::Vector3d barycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
   return Eigen::Vector3d(1.0 - v - w, v, w);
 }
 
+// A vertex in the collision band at the step's start is a contact with a normal force.
+// One inside the obstacle is not: it is a start state the penalty is pushing out (a
+// perturbed or predicted window start, or after a failed step), and its penalty force,
+// thousands of times the vertex's weight, is no friction bound: friction from such
+// starts held windows at the iteration cap. It gets friction once it is back in the band.
+bool in_contact(double distance, double band) { return distance >= 0 && distance < band; }
+
 }  // namespace
 
 FrictionEnergy::FrictionEnergy(int num_vertices, const CollisionEnergy& collision,
@@ -74,7 +81,7 @@ void FrictionEnergy::lag(const Eigen::VectorXd& x_start, double body_motion_scal
     for (const auto& sphere : collision_.spheres()) {
       if (!(sphere.friction > 0)) continue;
       const DistanceSample s = signed_distance(sphere, xi);
-      if (s.distance < delta) add_contact(i, xi, s, sphere.friction, Eigen::Vector3d::Zero());
+      if (in_contact(s.distance, delta)) add_contact(i, xi, s, sphere.friction, Eigen::Vector3d::Zero());
     }
     for (size_t b = 0; b < bodies.size(); ++b) {
       if (!(body_friction_[b] > 0)) continue;
@@ -101,7 +108,7 @@ void FrictionEnergy::lag(const Eigen::VectorXd& x_start, double body_motion_scal
       // weight of 1e-4 N) became the friction bound: the skirt on the walking body then
       // stalled at the iteration cap from the first frame.
       s.distance += s.gradient.dot(motion);
-      if (!(s.distance < delta)) continue;
+      if (!in_contact(s.distance, delta)) continue;
       add_contact(i, xi, s, body_friction_[b], motion);
     }
   }
