@@ -9,7 +9,7 @@
 #include <string>
 
 #include "apps/commands.h"
-#include "capture/default_character.h"
+#include "capture/character/default_character.h"
 
 namespace weft::apps {
 

@@ -9,11 +9,11 @@
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
-#include "capture/camera.h"
-#include "capture/character.h"
-#include "capture/pose_sequence.h"
-#include "capture/skeletool_io.h"
-#include "capture/text_reader.h"
+#include "capture/io/camera.h"
+#include "capture/character/character.h"
+#include "capture/motion/pose_sequence.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/io/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::apps {

@@ -1,5 +1,5 @@
 // `weft synth`: writes a synthetic multi-view dataset with 3D ground truth (the
-// synthetic capture studio, capture/synthetic_studio.h; layout in docs/DATASET.md).
+// synthetic capture studio, capture/studio/synthetic_studio.h; layout in docs/DATASET.md).
 #include <spdlog/spdlog.h>
 
 #include <map>
@@ -8,7 +8,7 @@
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
-#include "capture/synthetic_studio.h"
+#include "capture/studio/synthetic_studio.h"
 
 namespace weft::apps {
 

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "capture/deformation_layer.h"
-#include "capture/skeletool_io.h"
+#include "capture/deformation/deformation_layer.h"
+#include "capture/character/skeletool_io.h"
 #include "graph/profiler.h"
 #include "graph/threads.h"
 #include "ops/ops.h"

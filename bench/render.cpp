@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "capture/character.h"
-#include "capture/renderer.h"
+#include "capture/character/character.h"
+#include "capture/render/renderer.h"
 #include "graph/threads.h"
 
 namespace {

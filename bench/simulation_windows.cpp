@@ -1,10 +1,10 @@
 // Simulation windows from perturbed starts, as the method's simulation loss runs them:
 // each window starts from a ground-truth pair of a `weft synth` dataset (frames t − 1, t)
 // perturbed by capture::perturb_start (stretch up to 30 %, smooth displacement up to
-// 3 cm, patches pushed 2 cm into the body, noisy velocities; capture/cloth_perturbation.h)
+// 3 cm, patches pushed 2 cm into the body, noisy velocities; capture/studio/cloth_perturbation.h)
 // and simulates FRAMES frames (default 2: a window of F = 3 frames) following the
 // ground-truth body and waistband, with the simulator built exactly as the synth built
-// the dataset's (capture/garment_simulator.h).
+// the dataset's (capture/studio/garment_simulator.h).
 //   Robustness: N windows (default 500) at seeded random starts, one at a time on one
 //   thread: each window's statuses, the failures (status != converged) with their window
 //   id, a NaN check, the deepest vertex inside the body at the end of every converged
@@ -28,10 +28,10 @@
 #include <string>
 #include <vector>
 
-#include "capture/cloth_perturbation.h"
-#include "capture/garment_simulator.h"
-#include "capture/garment_windows.h"
-#include "capture/portable_random.h"
+#include "capture/studio/cloth_perturbation.h"
+#include "capture/studio/garment_simulator.h"
+#include "capture/studio/garment_windows.h"
+#include "capture/io/portable_random.h"
 #include "graph/error.h"
 #include "graph/threads.h"
 #include "physics/simulation_window.h"

@@ -8,8 +8,8 @@
 #include <numbers>
 #include <random>
 
-#include "capture/bvh.h"
-#include "capture/motion_retarget.h"
+#include "capture/motion/bvh.h"
+#include "capture/motion/motion_retarget.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

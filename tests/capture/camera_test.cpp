@@ -5,9 +5,9 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
-#include "capture/camera.h"
-#include "capture/openpose.h"
-#include "capture/text_reader.h"
+#include "capture/io/camera.h"
+#include "capture/io/openpose.h"
+#include "capture/io/text_reader.h"
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 

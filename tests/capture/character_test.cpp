@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "capture/character.h"
-#include "capture/mesh_io.h"
-#include "capture/pose_sequence.h"
+#include "capture/character/character.h"
+#include "capture/io/mesh_io.h"
+#include "capture/motion/pose_sequence.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -6,9 +6,9 @@
 #include <chrono>
 #include <filesystem>
 
-#include "capture/character.h"
-#include "capture/mesh_io.h"
-#include "capture/skeletool_io.h"
+#include "capture/character/character.h"
+#include "capture/io/mesh_io.h"
+#include "capture/character/skeletool_io.h"
 
 using namespace weft::capture;
 

@@ -7,8 +7,8 @@
 #include <memory>
 #include <sstream>
 
-#include "capture/closest_point.h"
-#include "capture/default_character.h"
+#include "capture/io/closest_point.h"
+#include "capture/character/default_character.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

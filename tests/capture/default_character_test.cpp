@@ -6,7 +6,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "capture/default_character.h"
+#include "capture/character/default_character.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

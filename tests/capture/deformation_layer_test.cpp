@@ -4,8 +4,8 @@
 
 #include <filesystem>
 
-#include "capture/deformation_layer.h"
-#include "capture/skeletool_io.h"
+#include "capture/deformation/deformation_layer.h"
+#include "capture/character/skeletool_io.h"
 #include "graph/autograd.h"
 #include "ops/ops.h"
 

@@ -12,8 +12,8 @@
 #include <set>
 #include <sstream>
 
-#include "capture/default_character.h"
-#include "capture/skeletool_io.h"
+#include "capture/character/default_character.h"
+#include "capture/character/skeletool_io.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

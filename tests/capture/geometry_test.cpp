@@ -3,10 +3,10 @@
 
 #include <cmath>
 
-#include "capture/attachment.h"
-#include "capture/automatic_weights.h"
-#include "capture/closest_point.h"
-#include "capture/embedded_graph.h"
+#include "capture/character/attachment.h"
+#include "capture/character/automatic_weights.h"
+#include "capture/io/closest_point.h"
+#include "capture/character/embedded_graph.h"
 #include "graph/error.h"
 
 using namespace weft::capture;

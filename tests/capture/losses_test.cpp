@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "capture/losses.h"
+#include "capture/deformation/losses.h"
 #include "ops/ops.h"
 
 namespace weft::capture {

@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "capture/mesh.h"
-#include "capture/mesh_io.h"
-#include "capture/text_reader.h"
+#include "capture/io/mesh.h"
+#include "capture/io/mesh_io.h"
+#include "capture/io/text_reader.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -12,11 +12,11 @@
 #include <filesystem>
 #include <numbers>
 
-#include "capture/bvh.h"
-#include "capture/character.h"
-#include "capture/motion_retarget.h"
-#include "capture/procedural_motion.h"
-#include "capture/skeletool_io.h"
+#include "capture/motion/bvh.h"
+#include "capture/character/character.h"
+#include "capture/motion/motion_retarget.h"
+#include "capture/motion/procedural_motion.h"
+#include "capture/character/skeletool_io.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

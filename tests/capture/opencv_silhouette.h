@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "capture/camera.h"
-#include "capture/mesh.h"
+#include "capture/io/camera.h"
+#include "capture/io/mesh.h"
 
 namespace weft::capture::testing {
 

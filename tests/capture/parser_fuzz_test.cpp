@@ -6,12 +6,12 @@
 #include <functional>
 #include <random>
 
-#include "capture/camera.h"
-#include "capture/character.h"
-#include "capture/mesh_io.h"
-#include "capture/openpose.h"
-#include "capture/skeletool_io.h"
-#include "capture/text_reader.h"
+#include "capture/io/camera.h"
+#include "capture/character/character.h"
+#include "capture/io/mesh_io.h"
+#include "capture/io/openpose.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/io/text_reader.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <filesystem>
 
-#include "capture/bvh.h"
-#include "capture/motion_retarget.h"
-#include "capture/procedural_motion.h"
+#include "capture/motion/bvh.h"
+#include "capture/motion/motion_retarget.h"
+#include "capture/motion/procedural_motion.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -10,7 +10,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "capture/renderer.h"
+#include "capture/render/renderer.h"
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 

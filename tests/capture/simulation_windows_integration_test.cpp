@@ -12,11 +12,11 @@
 #include <memory>
 #include <sstream>
 
-#include "capture/cloth_perturbation.h"
-#include "capture/garment_simulator.h"
-#include "capture/garment_windows.h"
-#include "capture/portable_random.h"
-#include "capture/synthetic_studio.h"
+#include "capture/studio/cloth_perturbation.h"
+#include "capture/studio/garment_simulator.h"
+#include "capture/studio/garment_windows.h"
+#include "capture/io/portable_random.h"
+#include "capture/studio/synthetic_studio.h"
 #include "physics/simulation_window.h"
 
 using namespace weft::capture;

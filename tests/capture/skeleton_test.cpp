@@ -2,9 +2,9 @@
 
 #include <cmath>
 
-#include "capture/skeletool_io.h"
-#include "capture/skeleton.h"
-#include "capture/skinning.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/character/skeleton.h"
+#include "capture/character/skinning.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -2,8 +2,8 @@
 
 #include <random>
 
-#include "capture/automatic_weights.h"
-#include "capture/skinning.h"
+#include "capture/character/automatic_weights.h"
+#include "capture/character/skinning.h"
 
 using namespace weft::capture;
 

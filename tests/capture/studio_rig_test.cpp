@@ -7,7 +7,7 @@
 #include <cmath>
 #include <set>
 
-#include "capture/studio_rig.h"
+#include "capture/studio/studio_rig.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

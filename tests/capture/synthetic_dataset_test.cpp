@@ -12,8 +12,8 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-#include "capture/renderer.h"
-#include "capture/synthetic_dataset.h"
+#include "capture/render/renderer.h"
+#include "capture/dataset/synthetic_dataset.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -7,10 +7,10 @@
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
-#include "capture/default_character.h"
-#include "capture/renderer.h"
-#include "capture/studio_rig.h"
-#include "capture/synthetic_keypoints.h"
+#include "capture/character/default_character.h"
+#include "capture/render/renderer.h"
+#include "capture/studio/studio_rig.h"
+#include "capture/studio/synthetic_keypoints.h"
 
 using namespace weft::capture;
 

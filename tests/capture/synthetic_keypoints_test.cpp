@@ -6,9 +6,9 @@
 #include <cmath>
 #include <limits>
 
-#include "capture/renderer.h"
-#include "capture/studio_rig.h"
-#include "capture/synthetic_keypoints.h"
+#include "capture/render/renderer.h"
+#include "capture/studio/studio_rig.h"
+#include "capture/studio/synthetic_keypoints.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

@@ -16,14 +16,14 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "capture/camera.h"
-#include "capture/character.h"
-#include "capture/mesh_io.h"
-#include "capture/openpose.h"
-#include "capture/skeletool_io.h"
-#include "capture/studio_rig.h"
-#include "capture/synthetic_dataset.h"
-#include "capture/synthetic_studio.h"
+#include "capture/io/camera.h"
+#include "capture/character/character.h"
+#include "capture/io/mesh_io.h"
+#include "capture/io/openpose.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/studio/studio_rig.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/studio/synthetic_studio.h"
 #include "physics/body_mesh.h"
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"

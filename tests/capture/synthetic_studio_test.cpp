@@ -1,7 +1,7 @@
 // `weft synth` configs: what a user gets for a typo, a wrong type or a missing file.
 #include <gtest/gtest.h>
 
-#include "capture/synthetic_studio.h"
+#include "capture/studio/synthetic_studio.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;

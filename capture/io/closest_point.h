@@ -1,0 +1,38 @@
+#pragma once
+// Closest points on triangle meshes: the point–triangle primitive and a query structure
+// for many points against one mesh (used by attachment and weight transfer).
+#include <Eigen/Core>
+#include <vector>
+
+#include "capture/io/mesh.h"
+
+namespace weft::capture {
+
+// Closest point on triangle (a, b, c) to p, with its barycentric weights (sum 1, all ≥ 0).
+Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                          Eigen::Vector3d& barycentric);
+
+struct ClosestPoint {
+  int face = -1;
+  Eigen::Vector3d barycentric = Eigen::Vector3d::Zero();  // weights of F(face, 0..2)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  double distance = 0;  // character units
+};
+
+// Exact closest-triangle queries against a fixed mesh. Each query first bounds every
+// triangle by its enclosing sphere (cheap) and only runs the exact test where that bound
+// can beat the best distance so far; ties go to the lowest face index (deterministic).
+class ClosestTriangleQuery {
+ public:
+  ClosestTriangleQuery(const Vertices& V, const Faces& F);
+  ClosestPoint closest(const Eigen::Vector3d& p) const;
+
+ private:
+  Vertices V_;
+  Faces F_;
+  Vertices centers_;
+  Eigen::VectorXd radii_;
+};
+
+}  // namespace weft::capture

@@ -1,0 +1,71 @@
+#include "capture/studio/garment_simulator.h"
+
+#include "graph/error.h"
+
+namespace weft::capture {
+
+physics::Positions to_positions(const Vertices& V, double metres_per_unit) {
+  physics::Positions x(3 * V.rows());
+  for (int i = 0; i < V.rows(); ++i) x.segment<3>(3 * i) = V.row(i).transpose() * metres_per_unit;
+  return x;
+}
+
+Vertices to_vertices(const physics::Positions& x, double metres_per_unit) {
+  Vertices V(x.size() / 3, 3);
+  for (int i = 0; i < V.rows(); ++i) V.row(i) = x.segment<3>(3 * i).transpose() / metres_per_unit;
+  return V;
+}
+
+physics::SimulationSettings garment_simulation_settings(const SynthSimulationConfig& s, double fps) {
+  physics::SimulationSettings settings;
+  settings.time_step = 1.0 / fps;
+  settings.substeps = s.substeps;
+  settings.material = s.material;
+  settings.collision_thickness = s.collision_thickness;
+  settings.collision_stiffness = s.collision_stiffness;
+  settings.pin_stiffness = s.pin_stiffness;
+  settings.newton.max_iterations = s.max_iterations;
+  settings.newton.tolerance = s.tolerance;
+  return settings;
+}
+
+std::vector<int> garment_pin_vertices(const Character& ch) {
+  return std::vector<int>(ch.attachment.anchors.data(), ch.attachment.anchors.data() + ch.attachment.size());
+}
+
+std::vector<physics::Vec3> garment_pin_targets(const Character& ch, const Vertices& posed_cloth) {
+  std::vector<physics::Vec3> t;
+  t.reserve(ch.attachment.size());
+  for (int a : garment_pin_vertices(ch)) t.push_back(posed_cloth.row(a).transpose() * ch.metres_per_unit);
+  return t;
+}
+
+std::unique_ptr<physics::ClothSimulator> make_garment_simulator(const Character& ch,
+                                                                const SynthSimulationConfig& s, double fps,
+                                                                const Eigen::MatrixX3d& body_metres,
+                                                                const std::vector<physics::Vec3>& pin_targets) {
+  WEFT_CHECK(ch.has_cloth(), ch.source, ": the character has no garment to simulate");
+  const TriangleMesh& cloth_mesh = ch.cloth->mesh;
+  std::vector<std::array<int, 3>> tris(cloth_mesh.num_faces());
+  for (int i = 0; i < cloth_mesh.num_faces(); ++i) tris[i] = {cloth_mesh.F(i, 0), cloth_mesh.F(i, 1), cloth_mesh.F(i, 2)};
+  auto sim = std::make_unique<physics::ClothSimulator>(
+      physics::make_cloth_mesh(to_positions(cloth_mesh.V, ch.metres_per_unit), tris, s.material.density),
+      garment_simulation_settings(s, fps));
+  std::vector<std::array<int, 3>> body_faces(ch.body.mesh.num_faces());
+  for (int i = 0; i < ch.body.mesh.num_faces(); ++i)
+    body_faces[i] = {ch.body.mesh.F(i, 0), ch.body.mesh.F(i, 1), ch.body.mesh.F(i, 2)};
+  sim->add_body(physics::BodyMesh(body_metres, body_faces, ch.inactive_body_faces), s.friction);
+  sim->set_pins(garment_pin_vertices(ch), pin_targets);
+  return sim;
+}
+
+physics::SimulatorFactory garment_simulator_factory(const Character& ch, const SynthSimulationConfig& s,
+                                                    double fps) {
+  WEFT_CHECK(ch.has_cloth(), ch.source, ": the character has no garment to simulate");
+  auto character = std::make_shared<const Character>(ch);
+  auto body = std::make_shared<const Eigen::MatrixX3d>(ch.body.mesh.V * ch.metres_per_unit);
+  auto pins = std::make_shared<const std::vector<physics::Vec3>>(garment_pin_targets(ch, ch.cloth->mesh.V));
+  return [character, s, fps, body, pins]() { return make_garment_simulator(*character, s, fps, *body, *pins); };
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,102 @@
+#include "capture/studio/garment_windows.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "capture/studio/garment_simulator.h"
+#include "capture/io/mesh_io.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string gt_file(const std::string& dir, const char* kind, int frame) {
+  return (fs::path(dir) / "gt" / (std::string(kind) + "_" + dataset_frame_name(frame) + ".ply")).string();
+}
+
+}  // namespace
+
+Eigen::MatrixX3d GarmentSequence::body(int frame) const {
+  WEFT_CHECK(frame >= 0 && frame < frames, dir, ": body frame ", frame, " outside [0, ", frames, ")");
+  const std::string path = gt_file(dir, "body", frame);
+  const TriangleMesh m = read_ply(path);
+  WEFT_CHECK(m.num_vertices() == character.body.mesh.num_vertices(), path, ": ", m.num_vertices(),
+             " vertices, the character's body has ", character.body.mesh.num_vertices());
+  return Eigen::MatrixX3d(m.V * character.metres_per_unit);
+}
+
+physics::SimulatorFactory GarmentSequence::simulator_factory() const {
+  return garment_simulator_factory(character, simulation, fps);
+}
+
+GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std::string& synth_config) {
+  const DatasetInfo info = read_dataset_info(dataset_dir);
+  const SynthConfig cfg = load_synth_config(synth_config);
+  WEFT_CHECK(cfg.simulation.enabled, synth_config, ": simulation.enabled is false: the dataset's garment is skinned");
+  WEFT_CHECK(std::abs(cfg.motion.fps - info.fps) < 1e-9, synth_config, ": motion.fps ", cfg.motion.fps,
+             " but the dataset ", dataset_dir, " is at ", info.fps, " fps: not the config it was made with");
+  GarmentSequence s;
+  s.dir = dataset_dir;
+  s.character = load_character(info.character);
+  WEFT_CHECK(s.character.has_cloth(), info.character, ": the character has no garment");
+  s.simulation = cfg.simulation;
+  s.fps = info.fps;
+  s.frames = info.frames;
+  s.failed_frames = info.failed_frames;
+  const Motion motion = read_motion((fs::path(dataset_dir) / "gt" / "pose.motion").string(),
+                                    static_cast<int>(s.character.rest_dofs.size()));
+  WEFT_CHECK(motion.num_frames() == s.frames, dataset_dir, "/gt/pose.motion: ", motion.num_frames(),
+             " frames, dataset.yaml says ", s.frames);
+  const double mpu = s.character.metres_per_unit;
+  for (int f = 0; f < s.frames; ++f) {
+    const std::string path = gt_file(dataset_dir, "cloth", f);
+    const TriangleMesh m = read_ply(path);
+    WEFT_CHECK(m.num_vertices() == s.character.cloth->mesh.num_vertices(), path, ": ", m.num_vertices(),
+               " vertices, the character's garment has ", s.character.cloth->mesh.num_vertices());
+    s.cloth.push_back(to_positions(m.V, mpu));
+    const PosedCharacter posed = pose_character(s.character, motion.dofs.row(f).transpose());
+    s.pin_targets.push_back(garment_pin_targets(s.character, posed.cloth));
+  }
+  return s;
+}
+
+physics::SimulationWindow garment_window(const GarmentSequence& s, int start, int frames,
+                                         physics::Positions x_prev2, physics::Positions x_prev) {
+  WEFT_CHECK(frames >= 1 && start >= 0 && start + frames < s.frames, s.dir, ": a window of ", frames,
+             " frames after frame ", start, " does not fit in ", s.frames, " frames");
+  physics::SimulationWindow w;
+  w.x_prev2 = std::move(x_prev2);
+  w.x_prev = std::move(x_prev);
+  w.frames = frames;
+  for (int f = start; f <= start + frames; ++f) w.body.push_back(s.body(f));
+  w.pin_vertices = garment_pin_vertices(s.character);
+  for (int f = start + 1; f <= start + frames; ++f) w.pin_targets.push_back(s.pin_targets[f]);
+  return w;
+}
+
+Penetration body_penetration(const physics::BodyMesh& body, const physics::Positions& x) {
+  Penetration p;
+  for (int i = 0; i < x.size() / 3; ++i) {
+    const physics::ClosestPoint c = body.closest_point(x.segment<3>(3 * i));
+    if (c.face >= 0 && c.distance < 0) {
+      p.max_depth = std::max(p.max_depth, -c.distance);
+      ++p.vertices_inside;
+    }
+  }
+  return p;
+}
+
+physics::BodyMesh collision_body(const GarmentSequence& s, int frame) {
+  const TriangleMesh& m = s.character.body.mesh;
+  std::vector<std::array<int, 3>> faces(m.num_faces());
+  for (int i = 0; i < m.num_faces(); ++i) faces[i] = {m.F(i, 0), m.F(i, 1), m.F(i, 2)};
+  return physics::BodyMesh(s.body(frame), faces, s.character.inactive_body_faces);
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,664 @@
+#include "capture/studio/synthetic_studio.h"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "capture/motion/bvh.h"
+#include "capture/io/camera.h"
+#include "capture/character/character.h"
+#include "capture/studio/garment_simulator.h"
+#include "capture/motion/motion_retarget.h"
+#include "capture/io/openpose.h"
+#include "capture/io/mesh_io.h"
+#include "capture/motion/procedural_motion.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/io/strict_yaml.h"
+#include "graph/atomic_file.h"
+#include "graph/error.h"
+#include "physics/cloth_metrics.h"
+#include "physics/cloth_simulator.h"
+#include "physics/scene.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// ------------------------------------------------------------------ config
+
+void parse_motion(const StrictYaml& y, const YAML::Node& n, SynthMotionConfig& m) {
+  y.check_keys(n, "motion.", {"procedural", "bvh", "mapping", "skeletool", "fps", "start", "frames", "stride"});
+  int sources = 0;
+  if (n["procedural"]) m.procedural = y.path(n["procedural"], "motion.procedural"), ++sources;
+  if (n["bvh"]) m.bvh = y.path(n["bvh"], "motion.bvh"), ++sources;
+  if (n["skeletool"]) m.skeletool = y.path(n["skeletool"], "motion.skeletool"), ++sources;
+  if (sources != 1) y.fail_at(n, "motion", "expected exactly one of procedural, bvh or skeletool");
+  if (n["mapping"]) m.mapping = y.path(n["mapping"], "motion.mapping");
+  if (m.skeletool.empty() && m.mapping.empty())
+    y.fail_at(n, "motion.mapping", "a procedural or BVH motion needs a retarget mapping (configs/retarget/*.yaml)");
+  if (n["fps"]) m.fps = y.number(n["fps"], "motion.fps", 1, 1000);
+  if (n["start"]) m.start_s = y.number(n["start"], "motion.start", 0, 1e6);
+  if (n["frames"]) m.frames = static_cast<int>(y.number(n["frames"], "motion.frames", 1, 1e6));
+  if (n["stride"]) m.stride = static_cast<int>(y.number(n["stride"], "motion.stride", 1, 1000));
+}
+
+void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationConfig& s) {
+  y.check_keys(n, "simulation.", {"enabled", "substeps", "settle_frames", "material", "collision", "pins", "solver",
+                                  "max_penetration", "friction"});
+  if (n["friction"]) s.friction = y.number(n["friction"], "simulation.friction", 0, 10);
+  if (n["enabled"]) s.enabled = y.get<bool>(n["enabled"], "simulation.enabled", "true or false");
+  if (n["substeps"]) s.substeps = static_cast<int>(y.number(n["substeps"], "simulation.substeps", 1, 100));
+  if (n["settle_frames"])
+    s.settle_frames = static_cast<int>(y.number(n["settle_frames"], "simulation.settle_frames", 0, 10000));
+  if (const YAML::Node m = n["material"]) {
+    y.check_keys(m, "simulation.material.",
+                 {"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness", "membrane",
+                  "compression_ratio", "min_area_ratio"});
+    auto& mat = s.material;
+    if (m["density"]) mat.density = y.positive(m["density"], "simulation.material.density");
+    if (m["youngs_modulus"]) mat.youngs_modulus = y.positive(m["youngs_modulus"], "simulation.material.youngs_modulus");
+    if (m["poisson_ratio"])
+      mat.poisson_ratio = y.number(m["poisson_ratio"], "simulation.material.poisson_ratio", 0, 0.499999);
+    if (m["bending_stiffness"])
+      mat.bending_stiffness = y.number(m["bending_stiffness"], "simulation.material.bending_stiffness", 0, 1e6);
+    if (m["thickness"]) mat.thickness = y.positive(m["thickness"], "simulation.material.thickness");
+    if (m["membrane"]) {
+      const std::string model = y.get<std::string>(m["membrane"], "simulation.material.membrane", "a string");
+      if (model != "stvk" && model != "tension_field")
+        y.fail_at(m["membrane"], "simulation.material.membrane", "expected stvk or tension_field, found '" + model + "'");
+      mat.membrane = model == "stvk" ? physics::MembraneModel::stvk : physics::MembraneModel::tension_field;
+    }
+    if (m["compression_ratio"])
+      mat.compression_ratio = y.number(m["compression_ratio"], "simulation.material.compression_ratio", 0, 1);
+    if (m["min_area_ratio"])
+      mat.min_area_ratio = y.number(m["min_area_ratio"], "simulation.material.min_area_ratio", 0, 0.999999);
+  }
+  if (const YAML::Node c = n["collision"]) {
+    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});
+    if (c["thickness"]) s.collision_thickness = y.positive(c["thickness"], "simulation.collision.thickness");
+    if (c["stiffness"]) s.collision_stiffness = y.positive(c["stiffness"], "simulation.collision.stiffness");
+  }
+  if (const YAML::Node p = n["pins"]) {
+    y.check_keys(p, "simulation.pins.", {"stiffness"});
+    if (p["stiffness"]) s.pin_stiffness = y.positive(p["stiffness"], "simulation.pins.stiffness");
+  }
+  if (const YAML::Node v = n["solver"]) {
+    y.check_keys(v, "simulation.solver.", {"max_iterations", "tolerance"});
+    if (v["max_iterations"])
+      s.max_iterations = static_cast<int>(y.number(v["max_iterations"], "simulation.solver.max_iterations", 1, 10000));
+    if (v["tolerance"]) s.tolerance = y.positive(v["tolerance"], "simulation.solver.tolerance");
+  }
+  if (n["max_penetration"]) s.max_penetration = y.positive(n["max_penetration"], "simulation.max_penetration");
+}
+
+void parse_render(const StrictYaml& y, const YAML::Node& n, SynthRenderConfig& r) {
+  y.check_keys(n, "render.", {"background", "supersample", "dt_scale", "body_texture"});
+  if (n["body_texture"]) r.body_texture = y.path(n["body_texture"], "render.body_texture");
+  if (n["background"]) {
+    const std::string b = y.get<std::string>(n["background"], "render.background", "green or clutter");
+    if (b == "green") r.background = BackgroundKind::solid;
+    else if (b == "clutter") r.background = BackgroundKind::clutter;
+    else y.fail_at(n["background"], "render.background", "expected green or clutter, found '" + b + "'");
+  }
+  if (n["supersample"]) {
+    r.supersample = static_cast<int>(y.number(n["supersample"], "render.supersample", 1, 7));
+    if (r.supersample % 2 == 0) y.fail_at(n["supersample"], "render.supersample", "expected an odd number 1..7");
+  }
+  if (n["dt_scale"]) r.dt_scale = y.number(n["dt_scale"], "render.dt_scale", 1, 256);
+}
+
+Eigen::Vector3d vec3(const StrictYaml& y, const YAML::Node& n, const std::string& key) {
+  if (!n.IsSequence() || n.size() != 3) y.fail_at(n, key, "expected [x, y, z] in metres");
+  return {y.number(n[0], key), y.number(n[1], key), y.number(n[2], key)};
+}
+
+void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraConfig& c) {
+  if (n["rig"]) {
+    const std::string r = y.get<std::string>(n["rig"], "cameras.rig", "studio or wild");
+    if (r == "studio") c.kind = CameraRigKind::studio;
+    else if (r == "wild") c.kind = CameraRigKind::wild;
+    else y.fail_at(n["rig"], "cameras.rig", "expected studio or wild, found '" + r + "'");
+  }
+  if (c.kind == CameraRigKind::studio) {
+    StudioRigConfig& s = c.studio;
+    y.numbers(n, "cameras.",
+                      {{"vertical_fov_deg", &s.vertical_fov_deg, 1, 170},
+                       {"radius_m", &s.radius_m, 0.1, 100},
+                       {"height_m", &s.height_m, -100, 100},
+                       {"first_azimuth_deg", &s.first_azimuth_deg, -360, 360},
+                       {"ring_spacing_m", &s.ring_spacing_m, 0, 100},
+                       {"k1", &s.k1, -1, 1}},
+                      {{"views", &s.views, 1, 72}, {"width", &s.width, 16, 8192}, {"height", &s.height, 16, 8192},
+                       {"rings", &s.rings, 0, 72}},
+                      {"rig", "target_m"});
+    if (n["target_m"]) s.target_m = vec3(y, n["target_m"], "cameras.target_m");
+  } else {
+    WildCameraConfig& w = c.wild;
+    y.numbers(n, "cameras.",
+                      {{"vertical_fov_deg", &w.vertical_fov_deg, 1, 170},
+                       {"radius_start_m", &w.radius_start_m, 0.1, 100},
+                       {"radius_end_m", &w.radius_end_m, 0.1, 100},
+                       {"height_m", &w.height_m, -100, 100},
+                       {"start_azimuth_deg", &w.start_azimuth_deg, -360, 360},
+                       {"arc_deg", &w.arc_deg, -720, 720},
+                       {"shake_position_m", &w.shake_position_m, 0, 1},
+                       {"shake_rotation_deg", &w.shake_rotation_deg, 0, 30},
+                       {"shake_frequency_hz", &w.shake_frequency_hz, 0, 100},
+                       {"k1", &w.k1, -1, 1},
+                       {"exposure_min", &w.exposure_min, 0.01, 10},
+                       {"exposure_max", &w.exposure_max, 0.01, 10},
+                       {"exposure_frequency_hz", &w.exposure_frequency_hz, 0, 100},
+                       {"follow_smoothing_s", &w.follow_smoothing_s, 0, 100}},
+                      {{"width", &w.width, 16, 8192}, {"height", &w.height, 16, 8192}},
+                      {"rig", "target_m", "follow_subject"});
+    if (n["target_m"]) w.target_m = vec3(y, n["target_m"], "cameras.target_m");
+    if (n["follow_subject"]) w.follow_subject = y.get<bool>(n["follow_subject"], "cameras.follow_subject", "true or false");
+    if (w.exposure_min > w.exposure_max) y.fail_at(n, "cameras.exposure_min", "must not exceed exposure_max");
+  }
+}
+
+void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& n, KeypointNoiseConfig& k) {
+  y.numbers(n, "keypoints.",
+                    {{"noise_px", &k.noise_px, 0, 1000},
+                     {"dropout", &k.dropout, 0, 1},
+                     {"occluded_dropout", &k.occluded_dropout, 0, 1},
+                     {"visible_confidence", &k.visible_confidence, 0, 1},
+                     {"occluded_confidence", &k.occluded_confidence, 0, 1},
+                     {"confidence_jitter", &k.confidence_jitter, 0, 1},
+                     {"depth_tolerance_m", &k.depth_tolerance_m, 0, 10}},
+                    {}, {});
+  validate_keypoint_noise(k, y.file + ": keypoints");
+}
+
+void parse_splits(const StrictYaml& y, const YAML::Node& n, SynthConfig& c) {
+  y.check_keys(n, "splits.", {"val", "test"});
+  if (n["val"]) c.val_fraction = y.number(n["val"], "splits.val", 0, 1);
+  if (n["test"]) c.test_fraction = y.number(n["test"], "splits.test", 0, 1);
+  if (c.val_fraction + c.test_fraction > 1) y.fail_at(n, "splits", "val + test must not exceed 1");
+}
+
+// ------------------------------------------------------------------ motion
+
+Motion load_dataset_motion(const SynthConfig& cfg, const Character& character,
+                           const std::function<void(const SynthProgress&)>& progress) {
+  const SynthMotionConfig& m = cfg.motion;
+  const int needed = (m.frames - 1) * m.stride + 1;  // motion frames at m.fps
+  if (!m.skeletool.empty()) {
+    Motion all = read_motion(m.skeletool, character.skeleton.num_dofs());
+    const int first = static_cast<int>(std::lround(m.start_s * m.fps));
+    WEFT_CHECK(first + needed <= all.num_frames(), m.skeletool, ": ", all.num_frames(), " frames, but ", cfg.file,
+               " asks for ", needed, " from frame ", first, " (motion.start ", m.start_s, " s at ", m.fps, " fps)");
+    Motion out;
+    out.dofs = all.dofs.middleRows(first, needed);
+    for (int i = 0; i < needed; ++i) out.frame_ids.push_back(i);
+    return out;
+  }
+  BvhMotion source;
+  if (!m.procedural.empty()) {
+    source = generate_motion(load_motion_spec(m.procedural), m.fps);
+  } else {
+    source = read_bvh(m.bvh);
+  }
+  const double duration = source.frame_time_s * (source.num_frames() - 1);
+  const double end_s = m.start_s + (needed - 1) / m.fps;
+  WEFT_CHECK(end_s <= duration + 1e-9, cfg.file, ": motion.frames ", m.frames, " (stride ", m.stride, ") from ",
+             m.start_s, " s need ", end_s, " s of motion, but ", source.source.empty() ? m.procedural : source.source,
+             " lasts ", duration, " s");
+  RetargetOptions o;
+  o.fps = m.fps;
+  o.start_s = m.start_s;
+  o.end_s = end_s + 0.5 / m.fps;
+  o.progress = [&](int done, int total) {
+    if (progress) progress({"motion", done, total});
+  };
+  RetargetResult r = retarget_motion(source, load_retarget_mapping(m.mapping), character, o);
+  WEFT_CHECK(r.motion.num_frames() >= needed, cfg.file, ": retargeting gave ", r.motion.num_frames(),
+             " frames, ", needed, " needed");
+  Motion out;
+  out.dofs = r.motion.dofs.topRows(needed);
+  for (int i = 0; i < needed; ++i) out.frame_ids.push_back(i);
+  return out;
+}
+
+// ------------------------------------------------------------------ helpers
+
+std::string frame_file(const fs::path& dir, const std::string& view, int frame, const char* suffix) {
+  return (dir / view / (dataset_frame_name(frame) + suffix)).string();
+}
+
+void write_png(const std::string& path, const cv::Mat& image) {
+  std::vector<uchar> bytes;
+  WEFT_CHECK(cv::imencode(".png", image, bytes), path, ": PNG encoding failed");
+  write_bytes_atomically(path, bytes.data(), bytes.size());
+}
+
+void make_dir(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  WEFT_CHECK(!ec && fs::is_directory(dir), dir.string(), ": cannot create the directory (", ec.message(), ")");
+}
+
+// Distance transform as 16-bit fixed point (docs/DATASET.md).
+cv::Mat quantize_dt(const cv::Mat& dt, double scale) {
+  cv::Mat out(dt.size(), CV_16UC1);
+  for (int y = 0; y < dt.rows; ++y) {
+    const float* src = dt.ptr<float>(y);
+    uint16_t* dst = out.ptr<uint16_t>(y);
+    for (int x = 0; x < dt.cols; ++x) dst[x] = static_cast<uint16_t>(std::min(65535.0, std::round(src[x] * scale)));
+  }
+  return out;
+}
+
+TriangleMesh with_vertices(const TriangleMesh& mesh, const Vertices& V) {
+  TriangleMesh out;
+  out.V = V;
+  out.F = mesh.F;
+  return out;
+}
+
+// A contact sheet (at most 4 columns, tiles of at most 256 px) with keypoints drawn (green
+// visible, orange low confidence) and mask outlines: every view of the middle frame, or
+// with fewer than 4 views (a moving camera) up to 8 frames spread over the sequence.
+cv::Mat preview_sheet(const fs::path& out, const std::vector<std::string>& views, int frames) {
+  std::vector<std::pair<int, int>> tiles;  // (view, frame)
+  if (views.size() >= 4) {
+    for (int v = 0; v < static_cast<int>(views.size()); ++v) tiles.push_back({v, frames / 2});
+  } else {
+    const int shown = std::min(frames, 8);
+    for (int v = 0; v < static_cast<int>(views.size()); ++v)
+      for (int i = 0; i < shown; ++i) tiles.push_back({v, shown > 1 ? i * (frames - 1) / (shown - 1) : 0});
+  }
+  const int n = static_cast<int>(tiles.size()), cols = std::min(n, 4), rows = (n + cols - 1) / cols;
+  cv::Mat sheet;
+  for (int t = 0; t < n; ++t) {
+    const int v = tiles[t].first, frame = tiles[t].second;
+    cv::Mat image = cv::imread(frame_file(out / "images", views[v], frame, ".png"), cv::IMREAD_COLOR);
+    const cv::Mat mask = cv::imread(frame_file(out / "masks", views[v], frame, ".png"), cv::IMREAD_GRAYSCALE);
+    WEFT_CHECK(!image.empty() && !mask.empty(), out.string(), ": cannot read back frame ", frame, " of ", views[v]);
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+    cv::drawContours(image, contours, -1, cv::Scalar(255, 255, 255), 1);
+    const OpenPoseFrame kp = read_openpose_json(frame_file(out / "keypoints", views[v], frame, "_keypoints.json"));
+    for (const Body25& p : kp.people)
+      for (int k = 0; k < kBody25Count; ++k)
+        if (p(k, 2) > 0)
+          cv::circle(image, cv::Point2d(p(k, 0), p(k, 1)), 2,
+                     p(k, 2) >= 0.6 ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 140, 255), cv::FILLED);
+    const double scale = std::min(1.0, 256.0 / std::max(image.cols, image.rows));
+    if (scale < 1) cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);
+    cv::putText(image, views[v] + " " + dataset_frame_name(frame), cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(255, 255, 255), 1);
+    if (sheet.empty()) sheet = cv::Mat(rows * image.rows, cols * image.cols, CV_8UC3, cv::Scalar(0, 0, 0));
+    image.copyTo(sheet(cv::Rect((t % cols) * image.cols, (t / cols) * image.rows, image.cols, image.rows)));
+  }
+  return sheet;
+}
+
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+std::string yaml_int_list(const std::vector<int>& v) {
+  std::ostringstream s;
+  s << "[";
+  for (size_t i = 0; i < v.size(); ++i) s << (i ? ", " : "") << v[i];
+  s << "]";
+  return s.str();
+}
+
+}  // namespace
+
+std::string dataset_frame_name(int frame) {
+  char buf[16];
+  std::snprintf(buf, sizeof(buf), "%04d", frame);
+  return buf;
+}
+
+SynthConfig parse_synth_config(const std::string& text, const std::string& name) {
+  StrictYaml y;
+  y.file = name;
+  y.dir = fs::path(name).parent_path();
+  const YAML::Node root = y.parse(text);
+  if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
+  y.check_keys(root, "", {"name", "seed", "character", "motion", "simulation", "cameras", "render", "keypoints",
+                          "splits"});
+  SynthConfig c;
+  c.file = name;
+  c.name = root["name"] ? y.get<std::string>(root["name"], "name", "a string") : fs::path(name).stem().string();
+  if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
+  if (!root["character"]) y.fail_at(root, "character", "missing: a default-character config (configs/characters/*.yaml)");
+  c.character = y.path(root["character"], "character");
+  if (!root["motion"]) y.fail_at(root, "motion", "missing: the motion section");
+  parse_motion(y, root["motion"], c.motion);
+  if (root["simulation"]) parse_simulation(y, root["simulation"], c.simulation);
+  if (root["cameras"]) parse_camera_setup(y, root["cameras"], c.cameras);
+  if (root["render"]) parse_render(y, root["render"], c.render);
+  if (root["keypoints"]) parse_keypoint_noise(y, root["keypoints"], c.keypoints);
+  if (root["splits"]) parse_splits(y, root["splits"], c);
+  return c;
+}
+
+SynthConfig load_synth_config(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  WEFT_CHECK(in.good(), path, ": cannot open the synth config");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_synth_config(ss.str(), path);
+}
+
+SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_dir,
+                                const std::function<void(const SynthProgress&)>& progress) {
+  const auto t_start = Clock::now();
+  SynthSummary summary;
+  const fs::path out(out_dir);
+  make_dir(out);
+
+  // Character: generated, written into the dataset, used from memory.
+  auto t0 = Clock::now();
+  const DefaultCharacterConfig char_cfg = load_default_character_config(cfg.character);
+  const DefaultCharacter dc = make_default_character(char_cfg);
+  write_default_character(dc, char_cfg, (out / "character").string());
+  const Character& ch = dc.character;
+  WEFT_CHECK(ch.has_cloth(), cfg.character, ": the character has no garment (garment.type none); the studio "
+             "simulates and renders a garment");
+  const double mpu = ch.metres_per_unit;
+  summary.seconds_character = seconds_since(t0);
+
+  // Motion.
+  t0 = Clock::now();
+  const Motion motion = load_dataset_motion(cfg, ch, progress);
+  const int frames = cfg.motion.frames;
+  std::vector<PosedCharacter> posed;
+  posed.reserve(frames);
+  for (int f = 0; f < frames; ++f) {
+    const Eigen::VectorXd dofs = motion.dofs.row(f * cfg.motion.stride).transpose();
+    WEFT_CHECK(dofs.allFinite(), cfg.file, ": the motion has a non-finite dof at dataset frame ", f);
+    posed.push_back(pose_character(ch, dofs));
+  }
+  {
+    Motion gt;
+    gt.dofs.resize(frames, motion.dofs.cols());
+    for (int f = 0; f < frames; ++f) {
+      gt.dofs.row(f) = motion.dofs.row(f * cfg.motion.stride);
+      gt.frame_ids.push_back(f);
+    }
+    make_dir(out / "gt");
+    write_motion((out / "gt" / "pose.motion").string(), gt);
+  }
+  summary.seconds_motion = seconds_since(t0);
+
+  // Ground-truth cloth: simulated over the motion (or skinned).
+  t0 = Clock::now();
+  const TriangleMesh& cloth_mesh = ch.cloth->mesh;
+  std::vector<Vertices> cloth(frames);
+  summary.reports.resize(frames);
+  nlohmann::json metric_frames = nlohmann::json::array();
+  if (!cfg.simulation.enabled) {
+    for (int f = 0; f < frames; ++f) {
+      cloth[f] = posed[f].cloth;
+      summary.reports[f].frame = f;
+    }
+  } else {
+    const SynthSimulationConfig& s = cfg.simulation;
+    auto body_metres = [&](int f) -> Eigen::MatrixX3d { return posed[f].body * mpu; };
+    const std::vector<int> anchors = garment_pin_vertices(ch);
+    auto pin_targets = [&](int f) { return garment_pin_targets(ch, posed[f].cloth); };
+    const std::unique_ptr<physics::ClothSimulator> simulator =
+        make_garment_simulator(ch, s, cfg.motion.fps, body_metres(0), pin_targets(0));
+    physics::ClothSimulator& sim = *simulator;
+    const double h = sim.settings().time_step;
+    physics::Positions x2 = to_positions(posed[0].cloth, mpu), x1 = x2;
+    Eigen::MatrixX3d body_prev = body_metres(0), body_now;
+    const int total = s.settle_frames + frames - 1;
+    int done = 0;
+    // Settling: the garment falls into its rest drape on the first pose.
+    for (int k = 0; k < s.settle_frames; ++k) {
+      physics::StepResult r = sim.step(x2, x1);
+      x2 = std::move(x1);
+      x1 = std::move(r.x);
+      if (progress) progress({"simulation", ++done, total});
+    }
+    cloth[0] = to_vertices(x1, mpu);
+    summary.reports[0].frame = 0;
+    summary.reports[0].status = s.settle_frames > 0 ? "settled" : "skinned";
+    {
+      physics::FrameMetrics m;
+      physics::measure_penetration(sim, x1, m);
+      summary.reports[0].penetration_max = m.penetration_max;
+      summary.reports[0].failed = m.penetration_max > s.max_penetration;
+      metric_frames.push_back({{"frame", 0}, {"status", summary.reports[0].status},
+                               {"penetration_max", m.penetration_max},
+                               {"min_signed_distance", finite_or_null(m.min_signed_distance)}});
+    }
+    for (int f = 1; f < frames; ++f) {
+      body_now = body_metres(f);
+      sim.set_pins(anchors, pin_targets(f));
+      physics::StepResult r = sim.step(x2, x1, &body_prev, &body_now);
+      const physics::FrameMetrics m = physics::frame_metrics(sim, x2, x1, r.x, h);
+      SynthFrameReport& rep = summary.reports[f];
+      rep.frame = f;
+      rep.status = physics::to_string(r.status);
+      rep.newton_iterations = r.newton_iterations;
+      rep.penetration_max = m.penetration_max;
+      rep.oob_force_max_rel = m.oob_force_max_rel;
+      // Failed: ended more than 10× Newton's tolerance from equilibrium (a step stopped by the
+      // iteration cap or the line search close to it is kept), non-finite, or too deep.
+      const bool near_converged = r.status == physics::StepStatus::converged ||
+                                  (r.status != physics::StepStatus::non_finite && r.last.residual <= 10 * s.tolerance);
+      rep.failed = !near_converged || m.penetration_max > s.max_penetration || !r.x.allFinite();
+      physics::FrameRecord rec;
+      rec.frame = f;
+      rec.status = r.status;
+      rec.newton_iterations = r.newton_iterations;
+      rec.gradient_norm = r.gradient_norm;
+      rec.energy = r.energy;
+      rec.metrics = m;
+      nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
+      entry["failed"] = rep.failed;
+      metric_frames.push_back(entry);
+      cloth[f] = to_vertices(r.x, mpu);
+      x2 = std::move(x1);
+      x1 = std::move(r.x);
+      body_prev = body_now;
+      if (progress) progress({"simulation", ++done, total});
+    }
+  }
+  summary.seconds_simulation = seconds_since(t0);
+  for (const auto& r : summary.reports) summary.failed_frames += r.failed;
+
+  // Cameras.
+  std::vector<std::string> views;
+  std::vector<std::vector<Camera>> cameras;  // [view][frame]
+  std::vector<double> exposure(frames, 1.0);
+  if (cfg.cameras.kind == CameraRigKind::studio) {
+    StudioRigConfig rig = cfg.cameras.studio;
+    rig.metres_per_unit = mpu;
+    const std::vector<Camera> cams = studio_rig(rig);
+    for (const Camera& c : cams) {
+      views.push_back(c.name);
+      cameras.emplace_back(frames, c);
+    }
+    write_cameras_yaml((out / "cameras.yaml").string(), cams);
+  } else {
+    WildCameraConfig wild = cfg.cameras.wild;
+    wild.metres_per_unit = mpu;
+    std::vector<Eigen::Vector3d> subject_track(frames);  // the body's vertex centroid, character units
+    for (int f = 0; f < frames; ++f) subject_track[f] = posed[f].body.colwise().mean().transpose();
+    std::vector<Camera> path = wild_camera_path(wild, frames, cfg.motion.fps, cfg.seed, subject_track);
+    exposure = wild_exposure(wild, frames, cfg.motion.fps, cfg.seed);
+    views.push_back("wild");
+    for (int f = 0; f < frames; ++f) path[f].name = "wild_" + dataset_frame_name(f);
+    cameras.push_back(path);
+    write_cameras_yaml((out / "cameras.yaml").string(), path);
+  }
+  const int num_views = static_cast<int>(views.size());
+  for (const char* kind : {"images", "masks", "parts", "dt", "keypoints"})
+    for (const auto& v : views) make_dir(out / kind / v);
+
+  // Rendering, keypoints, files: (frame, view) pairs in parallel, each writing its own files.
+  double render_seconds = 0, write_seconds = 0;
+  std::mutex time_mutex;
+  std::atomic<int> rendered{0};
+  const cv::Mat clutter =
+      cfg.render.background == BackgroundKind::clutter
+          ? cluttered_background(cameras[0][0].width, cameras[0][0].height, cfg.seed)
+          : cv::Mat();
+  cv::Mat body_texture;
+  if (!cfg.render.body_texture.empty()) {
+    body_texture = cv::imread(cfg.render.body_texture, cv::IMREAD_COLOR);
+    WEFT_CHECK(!body_texture.empty(), cfg.render.body_texture, ": cannot read the body texture (", cfg.file,
+               ": render.body_texture)");
+    WEFT_CHECK(ch.body.mesh.has_uv(), cfg.file, ": render.body_texture needs texture coordinates in the body mesh ",
+               ch.body.path, ", which has none");
+  }
+  const auto t_render = Clock::now();
+  tbb::parallel_for(0, frames * num_views, [&](int job) {
+    const int f = job / num_views, v = job % num_views;
+    const Camera& cam = cameras[v][f];
+    const auto a = Clock::now();
+    RenderMesh body, garment;
+    body.mesh = &ch.body.mesh;
+    body.vertices = &posed[f].body;
+    body.part = 1;
+    body.color = cv::Scalar(150, 175, 215);  // BGR: skin
+    if (!body_texture.empty()) {
+      body.source = ColorSource::texture;
+      body.texture = body_texture;
+    }
+    garment.mesh = &cloth_mesh;
+    garment.vertices = &cloth[f];
+    garment.part = 2;
+    garment.color = cv::Scalar(60, 60, 190);  // BGR: a red skirt
+    RenderOptions o;
+    o.supersample = cfg.render.supersample;
+    o.lighting.exposure = exposure[f];
+    if (cfg.render.background == BackgroundKind::clutter) {
+      o.background.kind = BackgroundKind::image;
+      o.background.image = clutter;
+    }
+    const RenderResult r = render(cam, {body, garment}, o);
+    const cv::Mat dt = distance_transform(r.mask);
+    KeypointNoiseConfig noise = cfg.keypoints;
+    noise.metres_per_unit = mpu;
+    const Body25 kp = synthesize_keypoints(cam, posed[f].body25, r.depth, noise,
+                                           mix_seed(cfg.seed, static_cast<uint64_t>(v), static_cast<uint64_t>(f)));
+    const auto b = Clock::now();
+    write_png(frame_file(out / "images", views[v], f, ".png"), r.rgb);
+    write_png(frame_file(out / "masks", views[v], f, ".png"), r.mask);
+    write_png(frame_file(out / "parts", views[v], f, ".png"), r.parts);
+    write_png(frame_file(out / "dt", views[v], f, ".png"), quantize_dt(dt, cfg.render.dt_scale));
+    OpenPoseFrame op;
+    op.people.push_back(kp);
+    write_openpose_json(frame_file(out / "keypoints", views[v], f, "_keypoints.json"), op);
+    const auto c = Clock::now();
+    {
+      std::lock_guard<std::mutex> lock(time_mutex);
+      render_seconds += std::chrono::duration<double>(b - a).count();
+      write_seconds += std::chrono::duration<double>(c - b).count();
+    }
+    const int n = ++rendered;
+    if (progress) progress({"rendering", n, frames * num_views});
+  });
+  const double render_wall = seconds_since(t_render);
+  // Split the wall time of the parallel loop by the CPU-time shares of its two halves.
+  const double busy = render_seconds + write_seconds;
+  summary.seconds_rendering = busy > 0 ? render_wall * render_seconds / busy : 0;
+  summary.seconds_writing = busy > 0 ? render_wall * write_seconds / busy : 0;
+
+  write_png((out / "preview.png").string(), preview_sheet(out, views, frames));
+
+  // Ground-truth meshes.
+  for (int f = 0; f < frames; ++f) {
+    write_ply((out / "gt" / ("body_" + dataset_frame_name(f) + ".ply")).string(),
+              with_vertices(ch.body.mesh, posed[f].body));
+    write_ply((out / "gt" / ("cloth_" + dataset_frame_name(f) + ".ply")).string(), with_vertices(cloth_mesh, cloth[f]));
+  }
+
+  // Splits: contiguous blocks in time (train, then val, then test), failed frames left out.
+  const int n_test = static_cast<int>(std::floor(cfg.test_fraction * frames));
+  const int n_val = static_cast<int>(std::floor(cfg.val_fraction * frames));
+  std::vector<int> failed;
+  for (int f = 0; f < frames; ++f) {
+    if (summary.reports[f].failed) {
+      failed.push_back(f);
+      continue;
+    }
+    if (f >= frames - n_test) summary.test.push_back(f);
+    else if (f >= frames - n_test - n_val) summary.val.push_back(f);
+    else summary.train.push_back(f);
+  }
+
+  // metrics.json: deterministic (no wall times; those go to timing.json).
+  {
+    nlohmann::json doc = {{"frames", metric_frames},
+                          {"summary",
+                           {{"simulated", cfg.simulation.enabled},
+                            {"cloth_vertices", cloth_mesh.num_vertices()},
+                            {"frames", frames},
+                            {"failed_frames", failed},
+                            {"time_step", 1.0 / cfg.motion.fps},
+                            {"substeps", cfg.simulation.substeps},
+                            {"settle_frames", cfg.simulation.settle_frames}}}};
+    write_text_atomically((out / "metrics.json").string(), doc.dump(2) + "\n");
+  }
+
+  summary.frames = frames;
+  summary.views = num_views;
+  summary.images = frames * num_views;
+  summary.cloth_vertices = cloth_mesh.num_vertices();
+  summary.body_vertices = ch.body.mesh.num_vertices();
+
+  // dataset.yaml
+  {
+    std::ostringstream y;
+    y << "# Written by `weft synth` from " << cfg.file << " (layout: docs/DATASET.md).\n"
+      << "format: weft-synth/1\n"
+      << "name: " << cfg.name << "\n"
+      << "seed: " << cfg.seed << "\n"
+      << "fps: " << cfg.motion.fps << "\n"
+      << "metres_per_unit: " << mpu << "\n"
+      << "frames: " << frames << "\n"
+      << "views: [";
+    for (int v = 0; v < num_views; ++v) y << (v ? ", " : "") << views[v];
+    y << "]\n"
+      << "image_width: " << cameras[0][0].width << "\n"
+      << "image_height: " << cameras[0][0].height << "\n"
+      << "camera_per_frame: " << (cfg.cameras.kind == CameraRigKind::wild ? "true" : "false") << "\n"
+      << "character: character/character.yaml\n"
+      << "dt_scale: " << cfg.render.dt_scale << "\n"
+      << "splits:\n"
+      << "  train: " << yaml_int_list(summary.train) << "\n"
+      << "  val: " << yaml_int_list(summary.val) << "\n"
+      << "  test: " << yaml_int_list(summary.test) << "\n"
+      << "failed_frames: " << yaml_int_list(failed) << "\n";
+    write_text_atomically((out / "dataset.yaml").string(), y.str());
+  }
+
+  summary.seconds_total = seconds_since(t_start);
+  {
+    nlohmann::json t = {{"seconds_character", summary.seconds_character},
+                        {"seconds_motion", summary.seconds_motion},
+                        {"seconds_simulation", summary.seconds_simulation},
+                        {"seconds_rendering", summary.seconds_rendering},
+                        {"seconds_writing", summary.seconds_writing},
+                        {"seconds_total", summary.seconds_total},
+                        {"views_per_second", summary.views_per_second()}};
+    write_text_atomically((out / "timing.json").string(), t.dump(2) + "\n");
+  }
+  return summary;
+}
+
+}  // namespace weft::capture

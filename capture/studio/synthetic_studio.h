@@ -1,0 +1,119 @@
+#pragma once
+// The synthetic capture studio: the library side of `weft synth`. From a config
+// (configs/synth/*.yaml, docs/DATASET.md) it builds the default character, drives it with
+// a motion (procedural, motion capture in BVH, or a Skeletool .motion), simulates the
+// garment over the motion with the body as a moving obstacle and the waistband pinned,
+// renders every frame into a studio rig of calibrated cameras (or one moving "in the wild"
+// camera), and writes images, masks, part masks, distance transforms, noisy BODY_25
+// keypoints, ground-truth meshes and the simulator's metrics. Deterministic for a seed:
+// every file but timing.json is identical between runs.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "capture/character/default_character.h"
+#include "capture/render/renderer.h"
+#include "capture/studio/studio_rig.h"
+#include "capture/studio/synthetic_keypoints.h"
+#include "physics/cloth_model.h"
+
+namespace weft::capture {
+
+struct SynthMotionConfig {
+  // Exactly one source.
+  std::string procedural;  // a motion spec (configs/motions/*.yaml)
+  std::string bvh;         // a BVH clip (e.g. /usr/share/assimp/models/BVH/01_01.bvh)
+  std::string mapping;     // retarget mapping for procedural and bvh (configs/retarget/*.yaml)
+  std::string skeletool;   // a Skeletool .motion with the character's dofs
+  double fps = 30;         // capture rate (frames per second)
+  double start_s = 0;      // where in the motion the dataset starts (s)
+  int frames = 10;         // frames written
+  int stride = 1;          // motion frames per dataset frame
+};
+
+struct SynthSimulationConfig {
+  bool enabled = true;     // false: the garment is skinned, not simulated
+  int substeps = 1;        // implicit Euler steps per frame (> 1: the frame-level out-of-balance
+                           // force then includes the sub-stepping error)
+  int settle_frames = 15;  // frames simulated at the first pose before the motion starts
+  physics::ClothMaterial material{0.15, 2.0e5, 0.3, 2.0e-6, 0.001};
+  double collision_thickness = 0.004;  // m
+  double collision_stiffness = 1.0e4;  // N/m
+  double pin_stiffness = 1.0e4;        // N/m
+  double friction = 0.3;               // Coulomb coefficient of the garment on the body (skin)
+  int max_iterations = 50;
+  double tolerance = 1e-3;             // relative to each vertex's weight
+  double max_penetration = 0.01;       // m: a frame deeper than this counts as failed
+};
+
+enum class CameraRigKind { studio, wild };
+
+struct SynthCameraConfig {
+  CameraRigKind kind = CameraRigKind::studio;
+  StudioRigConfig studio;
+  WildCameraConfig wild;
+};
+
+struct SynthRenderConfig {
+  BackgroundKind background = BackgroundKind::solid;  // solid (green screen) or clutter
+  int supersample = 1;
+  double dt_scale = 16;    // dt PNG value = min(65535, round(dt_scale · distance in pixels))
+  std::string body_texture;  // an image for the body's OBJ texture coordinates (ddc.png); empty: flat skin colour
+};
+
+struct SynthConfig {
+  std::string file;        // the YAML it came from (messages)
+  std::string name;
+  uint64_t seed = 1;
+  std::string character;   // a default-character config (configs/characters/*.yaml)
+  SynthMotionConfig motion;
+  SynthSimulationConfig simulation;
+  SynthCameraConfig cameras;
+  SynthRenderConfig render;
+  KeypointNoiseConfig keypoints;
+  double val_fraction = 0.1, test_fraction = 0.1;  // contiguous blocks at the end of the sequence
+};
+
+// Strict YAML: unknown keys, wrong types, missing files and out-of-range values are
+// errors naming the file, line and key. Paths are relative to the config.
+SynthConfig load_synth_config(const std::string& path);
+SynthConfig parse_synth_config(const std::string& yaml_text, const std::string& name);
+
+struct SynthFrameReport {
+  int frame = 0;
+  std::string status = "skinned";  // simulator status, or "skinned" without simulation
+  bool failed = false;             // left out of every split
+  int newton_iterations = 0;
+  double penetration_max = 0;      // m
+  double oob_force_max_rel = 0;    // ÷ m g
+};
+
+struct SynthSummary {
+  int frames = 0, views = 0;
+  int failed_frames = 0;
+  int images = 0;                   // rendered views
+  int cloth_vertices = 0, body_vertices = 0;
+  std::vector<int> train, val, test;
+  std::vector<SynthFrameReport> reports;
+  double seconds_character = 0, seconds_motion = 0, seconds_simulation = 0;
+  double seconds_rendering = 0;     // render + distance transform + keypoints (wall)
+  double seconds_writing = 0;       // PNG/JSON/PLY encoding and writes (wall)
+  double seconds_total = 0;
+  double views_per_second() const { return seconds_rendering > 0 ? images / seconds_rendering : 0; }
+};
+
+struct SynthProgress {
+  std::string stage;  // "motion", "simulation", "rendering"
+  int done = 0, total = 0;
+};
+
+// Writes the dataset into out_dir (created if missing; existing dataset files are
+// replaced). `progress` is called as stages advance.
+SynthSummary synthesize_dataset(const SynthConfig& config, const std::string& out_dir,
+                                const std::function<void(const SynthProgress&)>& progress = {});
+
+// File names of the layout (docs/DATASET.md).
+std::string dataset_frame_name(int frame);  // "0007"
+
+}  // namespace weft::capture
