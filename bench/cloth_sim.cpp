@@ -27,6 +27,7 @@
 #include <ctime>
 #include <vector>
 
+#include "bench/bench_clock.h"
 #include "graph/threads.h"
 #include "physics/cloth_simulator.h"
 
@@ -84,16 +85,8 @@ ClothMesh tube(int n, double r, double y_top, double len, double density) {
   return make_cloth_mesh(x, t, density);
 }
 
-// Process CPU time, ms: on a shared, loaded machine it is steadier than wall time.
-double cpu_ms() {
-  timespec t;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return 1e3 * t.tv_sec + 1e-6 * t.tv_nsec;
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
+using weft::bench::cpu_ms;
+using weft::bench::ms_since;
 
 }  // namespace
 

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_clock.h"
 #include "capture/studio/cloth_perturbation.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
@@ -41,16 +42,8 @@ using namespace weft::capture;
 
 namespace {
 
-// Process CPU time, ms (all threads).
-double cpu_ms() {
-  timespec t;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return 1e3 * t.tv_sec + 1e-6 * t.tv_nsec;
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
+using weft::bench::cpu_ms;
+using weft::bench::ms_since;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;

@@ -155,18 +155,7 @@ TEST(Friction, TheNormalForceIsLaggedAgainstTheBodyAtTheStepStart) {
 
 // ---- Whole simulations ----
 
-SimulationSettings sim_settings(double h) {
-  SimulationSettings s;
-  s.time_step = h;
-  s.material.density = 0.2;
-  s.material.youngs_modulus = 5e5;
-  s.material.poisson_ratio = 0.3;
-  s.material.bending_stiffness = 1e-5;
-  s.material.thickness = 1e-3;
-  s.newton.max_iterations = 50;
-  s.newton.tolerance = 1e-4;  // of each vertex's weight
-  return s;
-}
+SimulationSettings sim_settings(double h) { return testing::simulation_settings(h); }
 
 // A 10 cm cloth patch (6 × 6) resting on the top face of a large box tilted by θ about z,
 // each vertex at the depth in the collision band where the penalty carries its weight's

@@ -11,18 +11,7 @@
 namespace weft::physics {
 namespace {
 
-SimulationSettings settings(double h) {
-  SimulationSettings s;
-  s.time_step = h;
-  s.material.density = 0.2;
-  s.material.youngs_modulus = 5e5;
-  s.material.poisson_ratio = 0.3;
-  s.material.bending_stiffness = 1e-5;
-  s.material.thickness = 1e-3;
-  s.newton.max_iterations = 50;
-  s.newton.tolerance = 1e-4;  // of each vertex's weight
-  return s;
-}
+SimulationSettings settings(double h) { return testing::simulation_settings(h); }
 
 TEST(Simulator, FreeFallIsExactInOneIteration) {
   ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.4, 0.4, 6, 6, "xz", 0.2);
