@@ -94,19 +94,6 @@ cv::Mat read_png(const std::string& path, int flags, int type, const char* expec
   return m;
 }
 
-Body25 read_keypoints(const std::string& path) {
-  require_file(path);
-  OpenPoseFrame frame;
-  try {
-    frame = read_openpose_json(path);
-  } catch (const weft::Error& e) {
-    fail(path, ": ", e.what());
-  }
-  if (frame.people.empty()) return Body25::Zero();  // nobody detected
-  if (frame.people.size() > 1)
-    fail(path, ": expected one person, found ", frame.people.size());
-  return frame.people[0];
-}
 
 // ------------------------------------------------------------------------ cropping
 
@@ -193,6 +180,25 @@ std::vector<int> epoch_order(int n, uint64_t seed, int64_t epoch) {
 }
 
 }  // namespace
+
+Body25 read_dataset_keypoints(const std::string& path) {
+  require_file(path);
+  OpenPoseFrame frame;
+  try {
+    frame = read_openpose_json(path);
+  } catch (const weft::Error& e) {
+    fail(path, ": ", e.what());
+  }
+  if (frame.people.empty()) return Body25::Zero();  // nobody detected
+  if (frame.people.size() > 1)
+    fail(path, ": expected one person, found ", frame.people.size());
+  return frame.people[0];
+}
+
+cv::Mat read_dataset_mask(const DatasetInfo& info, int frame, const std::string& view) {
+  return read_png(dataset_mask_path(info, frame, view), cv::IMREAD_UNCHANGED, CV_8UC1,
+                  "an 8-bit one-channel mask", info) != 0;  // 0/255
+}
 
 // ------------------------------------------------------------------------ DatasetInfo
 
@@ -369,9 +375,8 @@ Sample SyntheticDataset::load_at(int index, int frame, const std::string& view) 
 
   const cv::Mat bgr = read_png(dataset_image_path(info_, frame, view), cv::IMREAD_COLOR, CV_8UC3,
                                "an 8-bit BGR image", info_);
-  const cv::Mat mask = read_png(dataset_mask_path(info_, frame, view), cv::IMREAD_UNCHANGED,
-                                CV_8UC1, "an 8-bit one-channel mask", info_) != 0;  // 0/255
-  const Body25 keypoints = read_keypoints(dataset_keypoints_path(info_, frame, view));
+  const cv::Mat mask = read_dataset_mask(info_, frame, view);
+  const Body25 keypoints = read_dataset_keypoints(dataset_keypoints_path(info_, frame, view));
 
   s.crop = choose_crop(mask, keypoints, S, options_.margin);
   s.crop_camera = crop_camera(s.camera, s.crop, S);
@@ -452,6 +457,7 @@ PrefetchOptions checked(const PrefetchOptions& o) {
   if (o.batch_size < 1) fail("DatasetPrefetcher: batch_size must be ≥ 1, got ", o.batch_size);
   if (o.batches_ahead < 1) fail("DatasetPrefetcher: batches_ahead must be ≥ 1, got ", o.batches_ahead);
   if (o.loader_threads < 0) fail("DatasetPrefetcher: loader_threads must be ≥ 0, got ", o.loader_threads);
+  if (o.first_batch < 0) fail("DatasetPrefetcher: first_batch must be ≥ 0, got ", o.first_batch);
   return o;
 }
 
@@ -473,7 +479,8 @@ DatasetPrefetcher::DatasetPrefetcher(const SyntheticDataset& dataset, PrefetchOp
   if (batches_per_epoch_ == 0)
     fail("DatasetPrefetcher: batch_size ", bs, " with drop_last exceeds the split's ", n, " samples");
   loaders_ = loader_arena_size(options_.loader_threads) - 1;
-  while (scheduled_ < options_.batches_ahead) schedule(scheduled_);
+  next_batch_ = scheduled_ = options_.first_batch;
+  while (scheduled_ < options_.first_batch + options_.batches_ahead) schedule(scheduled_);
 }
 
 DatasetPrefetcher::~DatasetPrefetcher() {

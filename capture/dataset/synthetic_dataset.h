@@ -83,6 +83,10 @@ std::string dataset_mask_path(const DatasetInfo& info, int frame, const std::str
 std::string dataset_keypoints_path(const DatasetInfo& info, int frame, const std::string& view);
 // Name of the camera of a frame and view in cameras.yaml: the view, or <view>_<frame:04d>.
 std::string dataset_camera_name(const DatasetInfo& info, int frame, const std::string& view);
+// One view's keypoints (Body25::Zero() when nobody is detected; more than one person is an
+// error) and foreground mask (CV_8UC1 0/255 of the dataset's image size); errors name the file.
+Body25 read_dataset_keypoints(const std::string& path);
+cv::Mat read_dataset_mask(const DatasetInfo& info, int frame, const std::string& view);
 
 struct DatasetOptions {
   std::string split = "train";
@@ -178,6 +182,7 @@ struct PrefetchOptions {
   int loader_threads = 1;  // TBB threads loading in the background (0: next() loads; capped by
                            // TBB's thread limit, e.g. a tbb::global_control, minus the caller)
   bool drop_last = false;  // drop an epoch's last, smaller batch
+  int64_t first_batch = 0; // the stream's batch the first next() returns (a resumed run)
 };
 
 // Shuffled batches of a dataset, loaded ahead on TBB threads. Batch k of the stream is
