@@ -13,5 +13,6 @@ void add_character_command(CLI::App& app);
 void add_nn_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_synth_command(CLI::App& app);
+void add_train_command(CLI::App& app);
 
 }  // namespace weft::apps

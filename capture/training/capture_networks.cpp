@@ -1,0 +1,191 @@
+#include "capture/training/capture_networks.h"
+
+#include <algorithm>
+
+#include "capture/character/skeleton.h"
+#include "graph/error.h"
+#include "ops/geometry.h"
+#include "ops/ops.h"
+
+namespace weft::capture {
+
+PoseParametrisation pose_parametrisation(const Character& character) {
+  const Skeleton& sk = character.skeleton;
+  WEFT_CHECK(sk.num_joints() > 0, character.source, ": the skeleton has no joints");
+  std::vector<int> children_count(sk.num_joints(), 0);
+  for (const Joint& j : sk.joints)
+    if (j.parent >= 0) ++children_count[j.parent];
+  std::vector<int> chain = {0};
+  for (;;) {
+    const int last = chain.back();
+    if (children_count[last] != 1) break;
+    int child = -1;
+    for (int j = last + 1; j < sk.num_joints(); ++j)
+      if (sk.joints[j].parent == last) child = j;
+    if (child < 0 || sk.joints[child].offset.norm() * sk.joints[child].scale > 1e-12) break;
+    chain.push_back(child);
+  }
+  PoseParametrisation p;
+  for (int d = 0; d < sk.num_dofs(); ++d) {
+    bool root = false;
+    for (const DofInfluence& inf : sk.dofs[d].joints)
+      root |= std::find(chain.begin(), chain.end(), inf.joint) != chain.end();
+    (root ? p.root_dofs : p.free_dofs).push_back(d);
+  }
+  p.pivot_joint = chain.back();
+  p.pivot = forward_kinematics(sk, character.rest_dofs)[p.pivot_joint].translation();
+  return p;
+}
+
+CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig& config, uint64_t seed)
+    : nn::Module("CaptureNetworks") {
+  pose_outputs_ = static_cast<int64_t>(pose_parametrisation(character).free_dofs.size()) + 6;
+  int64_t nodes = character.body.graph.nodes.rows();
+  if (character.has_cloth()) nodes += character.cloth->graph.nodes.rows();
+  deformation_outputs_ = 6 * nodes;
+  nn::ResNetOptions o;
+  o.outputs = pose_outputs_;
+  o.seed = seed;
+  pose_net = register_module("pose_net", nn::make_resnet(config.backbone, o));
+  o.outputs = deformation_outputs_;
+  o.seed = seed + 1;
+  deformation_net = register_module("deformation_net", nn::make_resnet(config.backbone, o));
+  // Zero last layer: PADefNet starts at A = 0, T = 0, the skinned template.
+  deformation_net->fc->weight.fill(0.0);
+  deformation_net->fc->bias.fill(0.0);
+}
+
+Tensor CaptureNetworks::forward(const Tensor&) {
+  fail("CaptureNetworks: call pose_net or deformation_net, not the container");
+}
+
+SampleViews sample_views(const std::vector<Camera>& input_cameras,
+                         const std::vector<std::vector<KeypointView>>& frame_views,
+                         const std::vector<double>& keypoint_mask, DType dtype) {
+  WEFT_CHECK(input_cameras.size() == frame_views.size(), "sample_views: ", input_cameras.size(),
+             " input cameras for ", frame_views.size(), " samples");
+  SampleViews v;
+  for (const Camera& c : input_cameras) v.input_rotations.push_back(c.R);
+  v.translation = root_translation_terms(frame_views, keypoint_mask, dtype);
+  return v;
+}
+
+CaptureModel::CaptureModel(const Character& character, const NetworkConfig& config)
+    : character_(character), config_(config), layer_(character, DType::F32),
+      param_(pose_parametrisation(character)) {
+  const Tensor& m = layer_.body25_mask();
+  for (int64_t i = 0; i < m.numel(); ++i) keypoint_mask_.push_back(m.data<float>()[i]);
+  const int64_t F = param_.free_dofs.size(), D = character.rest_dofs.size();
+  std::vector<double> sel(F * D, 0.0), rest(D);
+  for (int64_t i = 0; i < F; ++i) sel[i * D + param_.free_dofs[i]] = 1.0;
+  for (int64_t d = 0; d < D; ++d) rest[d] = character.rest_dofs[d];
+  free_to_dofs_ = Tensor::from_data({F, D}, sel, DType::F32);
+  rest_dofs_ = Tensor::from_data({D}, rest, DType::F32);
+  pivot_ = Tensor::from_data({1, 3}, {param_.pivot.x(), param_.pivot.y(), param_.pivot.z()}, DType::F32);
+  canonical_ = Tensor::from_data({3, 3}, {1, 0, 0, 0, -1, 0, 0, 0, -1}, DType::F32);
+  rotation_bias_ = Tensor::from_data({6}, {1, 0, 0, 0, 1, 0}, DType::F32);
+
+  // Keypoints carried by the body's embedded graph: each rides on the graph nodes and
+  // skinning weights of the body vertex nearest to it in the bind pose.
+  const Vertices bind = pose_character(character, character.rest_dofs).body25;
+  const Vertices& V = character.body.mesh.V;
+  const EmbeddedGraph& g = character.body.graph;
+  Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> skin_joints;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> skin_weights;
+  character.body.weights.padded(skin_joints, skin_weights);
+  const int64_t n = g.vertex_nodes.cols(), ns = skin_joints.cols();
+  std::vector<double> points(kBody25Count * 3, 0.0), node_w(kBody25Count * n), skin_w(kBody25Count * ns);
+  std::vector<int64_t> node_i(kBody25Count * n), skin_i(kBody25Count * ns);
+  for (int k = 0; k < kBody25Count; ++k) {
+    int nearest = 0;
+    if (bind.row(k).allFinite()) {
+      (V.rowwise() - bind.row(k)).rowwise().squaredNorm().minCoeff(&nearest);
+      for (int a = 0; a < 3; ++a) points[3 * k + a] = bind(k, a);
+    }
+    for (int64_t j = 0; j < n; ++j) node_i[k * n + j] = g.vertex_nodes(nearest, j), node_w[k * n + j] = g.vertex_weights(nearest, j);
+    for (int64_t j = 0; j < ns; ++j) skin_i[k * ns + j] = skin_joints(nearest, j), skin_w[k * ns + j] = skin_weights(nearest, j);
+  }
+  landmarks_.rest = Tensor::from_data({kBody25Count, 3}, points, DType::F32);
+  landmarks_.nodes = layer_.body().nodes;
+  landmarks_.node_index = Tensor::from_indices({kBody25Count, n}, node_i);
+  landmarks_.node_weights = Tensor::from_data({kBody25Count, n}, node_w, DType::F32);
+  landmarks_.skin_index = Tensor::from_indices({kBody25Count, ns}, skin_i);
+  landmarks_.skin_weights = Tensor::from_data({kBody25Count, ns}, skin_w, DType::F32);
+}
+
+int64_t CaptureModel::pose_outputs() const { return static_cast<int64_t>(param_.free_dofs.size()) + 6; }
+
+int64_t CaptureModel::deformation_outputs() const {
+  int64_t k = layer_.body().num_nodes();
+  if (layer_.cloth()) k += layer_.cloth()->num_nodes();
+  return 6 * k;
+}
+
+Tensor CaptureModel::to_world(const Tensor& points, const Tensor& rotation_t, const Tensor& translation) const {
+  const int64_t B = points.size(0);
+  return ops::add(ops::matmul(ops::sub(points, pivot_), rotation_t), ops::reshape(translation, {B, 1, 3}));
+}
+
+CapturePrediction CaptureModel::predict(const Tensor& pose_output, const Tensor& deformation_output,
+                                        const SampleViews& views, bool with_meshes) const {
+  const int64_t B = pose_output.size(0), F = param_.free_dofs.size();
+  WEFT_CHECK(pose_output.dim() == 2 && pose_output.size(1) == F + 6, "CaptureModel: PoseNet output ",
+             shape_str(pose_output.shape()), ", expected [B, ", F + 6, "]");
+  WEFT_CHECK(int64_t(views.input_rotations.size()) == B, "CaptureModel: ", views.input_rotations.size(),
+             " input views for a batch of ", B);
+  CapturePrediction p;
+  const Tensor theta = ops::scale(ops::slice(pose_output, 1, 0, F), config_.dof_scale);
+  p.dofs = ops::add(ops::matmul(theta, free_to_dofs_), rest_dofs_);
+  const Tensor relative = rotation_from_6d(ops::add(ops::slice(pose_output, 1, F, F + 6), rotation_bias_));
+  std::vector<double> rc(B * 9);
+  for (int64_t b = 0; b < B; ++b)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) rc[b * 9 + r * 3 + c] = views.input_rotations[b](c, r);  // R_cᵀ
+  const Tensor camera_to_world = Tensor::from_data({B, 3, 3}, rc, DType::F32);
+  p.rotation = ops::matmul(ops::matmul(camera_to_world, relative), canonical_);
+  const Tensor rotation_t = ops::transpose(p.rotation, 1, 2);
+
+  const PosedJoints joints = layer_.pose(p.dofs);
+  Tensor keypoints = layer_.body25(joints);
+
+  Tensor body_angles, body_translations, cloth_angles, cloth_translations;
+  if (deformation_output.defined()) {
+    WEFT_CHECK(deformation_output.dim() == 2 && deformation_output.size(0) == B &&
+                   deformation_output.size(1) == deformation_outputs(),
+               "CaptureModel: PADefNet output ", shape_str(deformation_output.shape()), ", expected [", B, ", ",
+               deformation_outputs(), "]");
+    const double to_units = config_.translation_scale_m / character_.metres_per_unit;
+    int64_t at = 0;
+    auto take = [&](int64_t k, double s) {
+      Tensor t = ops::scale(ops::reshape(ops::slice(deformation_output, 1, at, at + 3 * k), {B, k, 3}), s);
+      at += 3 * k;
+      return t;
+    };
+    const int64_t kb = layer_.body().num_nodes();
+    body_angles = take(kb, config_.angle_scale);
+    body_translations = take(kb, to_units);
+    p.body_rotations = ops::euler_to_rotation(body_angles);
+    p.body_translations = body_translations;
+    if (layer_.cloth()) {
+      const int64_t kc = layer_.cloth()->num_nodes();
+      cloth_angles = take(kc, config_.angle_scale);
+      cloth_translations = take(kc, to_units);
+      p.cloth_rotations = ops::euler_to_rotation(cloth_angles);
+      p.cloth_translations = cloth_translations;
+    }
+    // The keypoints move with the body's graph (as DeepCap's markers ride on the template).
+    keypoints = ops::add(keypoints, ops::sub(layer_.deform(landmarks_, joints, body_angles, body_translations),
+                                             layer_.deform(landmarks_, joints, Tensor(), Tensor())));
+  }
+  const Tensor oriented = ops::matmul(ops::sub(keypoints, pivot_), rotation_t);
+  p.translation = solve_root_translation(views.translation, oriented);
+  p.keypoints = ops::add(oriented, ops::reshape(p.translation, {B, 1, 3}));
+  if (!with_meshes) return p;
+  p.body = to_world(layer_.deform(layer_.body(), joints, body_angles, body_translations), rotation_t, p.translation);
+  if (layer_.cloth())
+    p.cloth = to_world(layer_.deform(*layer_.cloth(), joints, cloth_angles, cloth_translations), rotation_t,
+                       p.translation);
+  return p;
+}
+
+}  // namespace weft::capture

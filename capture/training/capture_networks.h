@@ -1,0 +1,111 @@
+#pragma once
+// The method's two networks and what their outputs mean (../shared/DESIGN.md):
+// - PoseNet (a ResNet) regresses the skeleton's dofs θ, except those of the root chain,
+//   and the camera-relative root rotation α (6D representation of Zhou et al. 2019,
+//   continuous over all rotations: a person seen from any side of a ring of cameras).
+// - PADefNet (a ResNet with a zero-initialised last layer, so training starts from the
+//   skinned template) regresses per-node Euler angles A and translations T of the body's
+//   and the cloth's embedded graphs.
+// The root translation is not regressed: CaptureModel solves it in closed form from the
+// 2D keypoints of the frame's views (global_pose.h).
+//
+// Posing: the root chain's dofs (global translation and rotation, e.g. ddc's Root_* and
+// GlobalScale, the generated skeleton's Hips_t*/r*) stay at the rest pose; the skeleton
+// posed so is rotated about the rest position p0 of the root chain's last joint and
+// moved:  X_world = R_world (X − p0) + t,  R_world = R_cᵀ R(α) C,
+// with R_c the input view's world→camera rotation and C = diag(1, −1, −1): α = identity is
+// the person upright facing the camera (OpenCV cameras look along +z with y down).
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "capture/character/character.h"
+#include "capture/deformation/deformation_layer.h"
+#include "capture/deformation/losses.h"
+#include "capture/io/camera.h"
+#include "capture/training/global_pose.h"
+#include "capture/training/training_config.h"
+#include "nn/resnet.h"
+
+namespace weft::capture {
+
+// Which dofs PoseNet regresses.
+struct PoseParametrisation {
+  std::vector<int> root_dofs;  // dofs driving the root chain: held at the rest pose
+  std::vector<int> free_dofs;  // the others, in skeleton order: regressed
+  int pivot_joint = 0;         // the root chain's last joint
+  Eigen::Vector3d pivot;       // its rest-pose position p0 (character units)
+};
+// The root chain: from the root joint, every following joint placed at its parent's
+// origin (zero offset) and the only child of it.
+PoseParametrisation pose_parametrisation(const Character& character);
+
+// Both networks as one module (checkpoints hold both: "pose_net.*", "deformation_net.*").
+class CaptureNetworks : public nn::Module {
+ public:
+  CaptureNetworks(const Character& character, const NetworkConfig& config, uint64_t seed);
+  Tensor forward(const Tensor& x) override;  // not used: call pose_net / deformation_net
+  std::shared_ptr<nn::ResNet> pose_net, deformation_net;
+  int64_t pose_outputs() const { return pose_outputs_; }
+  int64_t deformation_outputs() const { return deformation_outputs_; }
+
+ private:
+  int64_t pose_outputs_ = 0, deformation_outputs_ = 0;
+};
+
+// Per sample, what places its skeleton in the world: the input view's rotation and the
+// root translation terms from the frame's detections.
+struct SampleViews {
+  std::vector<Eigen::Matrix3d> input_rotations;  // R_c of each sample's input view
+  RootTranslationTerms translation;              // over all views of each sample's frame
+};
+SampleViews sample_views(const std::vector<Camera>& input_cameras,
+                         const std::vector<std::vector<KeypointView>>& frame_views,
+                         const std::vector<double>& keypoint_mask, DType dtype);
+
+// A prediction in world coordinates (character units), batched over samples B.
+struct CapturePrediction {
+  Tensor dofs;         // [B,D] (root chain at rest)
+  Tensor rotation;     // [B,3,3] R_world
+  Tensor translation;  // [B,3] t (the pivot's world position)
+  Tensor keypoints;    // [B,25,3] BODY_25 (unmapped rows are meaningless: use the mask)
+  Tensor body, cloth;  // [B,V,3]; cloth undefined without a garment
+  // Embedded-graph rotations [B,K,3,3] and translations [B,K,3] (undefined without PADefNet).
+  Tensor body_rotations, body_translations, cloth_rotations, cloth_translations;
+};
+
+class CaptureModel {
+ public:
+  CaptureModel(const Character& character, const NetworkConfig& config);
+  const Character& character() const { return character_; }
+  const DeformationLayer& layer() const { return layer_; }
+  const PoseParametrisation& parametrisation() const { return param_; }
+  const std::vector<double>& keypoint_mask() const { return keypoint_mask_; }  // 25: 1 mapped
+  int64_t pose_outputs() const;         // free dofs + 6
+  int64_t deformation_outputs() const;  // 6 (K_body + K_cloth)
+
+  // From PoseNet's output [B, pose_outputs()] and, when given, PADefNet's [B,
+  // deformation_outputs()] (undefined: the skinned template). with_meshes = false skips
+  // the vertices (PoseNet's stage needs keypoints only). With PADefNet the keypoints also
+  // move with the body's embedded graph: each rides on the nodes of the body vertex
+  // nearest to it in the bind pose, so L_lm reaches PADefNet while PoseNet is frozen.
+  CapturePrediction predict(const Tensor& pose_output, const Tensor& deformation_output,
+                            const SampleViews& views, bool with_meshes = true) const;
+
+ private:
+  Tensor to_world(const Tensor& points, const Tensor& rotation_t, const Tensor& translation) const;
+
+  const Character& character_;
+  NetworkConfig config_;
+  DeformationLayer layer_;
+  PoseParametrisation param_;
+  std::vector<double> keypoint_mask_;
+  Tensor free_to_dofs_;   // [F,D] 0/1
+  Tensor rest_dofs_;      // [D]
+  Tensor pivot_;          // [1,3]
+  Tensor canonical_;      // [3,3] C
+  Tensor rotation_bias_;  // [6] the identity's 6D vector
+  DeformableSurface landmarks_;  // BODY_25 keypoints as points on the body's embedded graph
+};
+
+}  // namespace weft::capture

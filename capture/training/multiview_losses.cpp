@@ -1,0 +1,132 @@
+#include "capture/training/multiview_losses.h"
+
+#include <tbb/parallel_for.h>
+
+#include "capture/deformation/losses.h"
+#include "graph/error.h"
+#include "ops/geometry.h"
+#include "ops/ops.h"
+
+namespace weft::capture {
+
+namespace {
+
+// Every vertex at least a millimetre-ish in front of the camera (projection refuses
+// points behind it; a wild early prediction may put some there: that view is skipped).
+bool in_front(const Camera& camera, const Vertices& V, const std::vector<int>* rows = nullptr) {
+  const double min_depth = 1e-6;
+  if (rows) {
+    for (int i : *rows)
+      if (camera.depth(V.row(i).transpose()) <= min_depth) return false;
+    return true;
+  }
+  for (int i = 0; i < V.rows(); ++i)
+    if (camera.depth(V.row(i).transpose()) <= min_depth) return false;
+  return true;
+}
+
+Tensor batch_row(const Tensor& t, int64_t b) { return ops::slice(t, 0, b, b + 1); }
+
+}  // namespace
+
+Vertices sample_vertices(const Tensor& vertices, int64_t b) {
+  WEFT_CHECK(vertices.dim() == 3 && vertices.size(2) == 3 && b >= 0 && b < vertices.size(0),
+             "sample_vertices: expected [B,V,3] and b < B, got ", shape_str(vertices.shape()), " and ", b);
+  const int64_t V = vertices.size(1);
+  Vertices out(V, 3);
+  const float* p = vertices.data<float>() + b * V * 3;
+  for (int64_t i = 0; i < V * 3; ++i) out.data()[i] = p[i];
+  return out;
+}
+
+Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& frames,
+                               const MultiviewSupervision& sup, const std::vector<double>& mask,
+                               LandmarkStatistics* stats) {
+  const int64_t B = keypoints.size(0);
+  WEFT_CHECK(int64_t(frames.size()) == B && keypoints.dim() == 3 && keypoints.size(1) == kBody25Count,
+             "multiview_landmark_loss: keypoints ", shape_str(keypoints.shape()), " for ", frames.size(), " frames");
+  std::vector<Tensor> projected;
+  std::vector<double> detections, confidence;
+  double error_sum = 0;
+  int error_count = 0;
+  for (int64_t b = 0; b < B; ++b) {
+    const Vertices K = sample_vertices(keypoints, b);
+    for (int v = 0; v < sup.views(); ++v) {
+      const Camera& cam = sup.camera(frames[b], v);
+      if (!in_front(cam, K)) continue;
+      const Body25& d = sup.detections(frames[b], v);
+      const double w = 1.0 / cam.width;
+      projected.push_back(ops::scale(ops::project_points(batch_row(keypoints, b), pinhole(cam)), w));
+      for (int m = 0; m < kBody25Count; ++m) {
+        detections.push_back(d(m, 0) * w);
+        detections.push_back(d(m, 1) * w);
+        confidence.push_back(d(m, 2) * mask[m]);
+        if (stats && d(m, 2) >= 0.1 && mask[m] > 0) {
+          error_sum += (cam.project(K.row(m).transpose()) - d.row(m).head<2>().transpose()).norm();
+          ++error_count;
+        }
+      }
+    }
+  }
+  if (stats) *stats = {error_count ? error_sum / error_count : 0.0, error_count};
+  if (projected.empty()) return ops::scale(ops::sum(keypoints), 0.0);
+  const int64_t n = projected.size();
+  double confidence_sum = 0;
+  for (double c : confidence) confidence_sum += c;
+  if (confidence_sum <= 0) return ops::scale(ops::sum(keypoints), 0.0);
+  const Tensor p = ops::concat(projected, 0);
+  // landmark_loss sums over keypoints and averages over its n rows: make it the mean over detections.
+  return ops::scale(landmark_loss(p, Tensor::from_data({n, kBody25Count, 2}, detections, DType::F32),
+                                  Tensor::from_data({n, kBody25Count}, confidence, DType::F32)),
+                    double(n) / confidence_sum);
+}
+
+Tensor multiview_silhouette_loss(const Tensor& vertices, const Faces& faces, const std::vector<int>& frames,
+                                 const MultiviewSupervision& sup) {
+  const int64_t B = vertices.size(0);
+  WEFT_CHECK(int64_t(frames.size()) == B, "multiview_silhouette_loss: ", B, " samples for ", frames.size(),
+             " frames");
+  const int views = sup.views();
+  struct Pair {
+    std::vector<int> rows;
+    std::vector<double> rho;
+  };
+  std::vector<Pair> pairs(B * views);
+  std::vector<Vertices> V(B);
+  for (int64_t b = 0; b < B; ++b) V[b] = sample_vertices(vertices, b);
+  // The silhouette's vertices and their weights: plain geometry, on TBB threads.
+  tbb::parallel_for(int64_t(0), int64_t(pairs.size()), [&](int64_t i) {
+    const int64_t b = i / views;
+    const int v = int(i % views);
+    const Camera& cam = sup.silhouette_camera(frames[b], v);
+    if (!in_front(cam, V[b])) return;
+    const std::vector<int> boundary = boundary_vertices(cam, V[b], faces);
+    const std::vector<double> rho =
+        silhouette_weights(cam, V[b], vertex_normals(V[b], faces), boundary, sup.distance_transform(frames[b], v));
+    for (size_t k = 0; k < boundary.size(); ++k)
+      if (rho[k] > 0) pairs[i].rows.push_back(boundary[k]), pairs[i].rho.push_back(rho[k]);
+  });
+  Tensor total;
+  double rho_sum = 0;
+  const int S = sup.silhouette_size();
+  for (int64_t i = 0; i < int64_t(pairs.size()); ++i) {
+    const Pair& p = pairs[i];
+    if (p.rows.empty()) continue;
+    const int64_t b = i / views;
+    const int v = int(i % views);
+    const int64_t N = p.rows.size();
+    const Tensor index = Tensor::from_indices({1, N}, std::vector<int64_t>(p.rows.begin(), p.rows.end()));
+    const Tensor projected =
+        ops::project_points(select_vertices(batch_row(vertices, b), index), pinhole(sup.silhouette_camera(frames[b], v)));
+    const cv::Mat dt = sup.distance_transform(frames[b], v);
+    std::vector<float> pixels(dt.begin<float>(), dt.end<float>());
+    const Tensor image = ops::reshape(Tensor::from_data({int64_t(dt.rows) * dt.cols}, pixels), {1, dt.rows, dt.cols});
+    const Tensor term = silhouette_loss(projected, image, Tensor::from_data({1, N}, p.rho, DType::F32));
+    total = total.defined() ? ops::add(total, term) : term;
+    for (double r : p.rho) rho_sum += r;
+  }
+  if (!total.defined()) return ops::scale(ops::sum(vertices), 0.0);
+  return ops::scale(total, 1.0 / (double(S) * S * rho_sum));
+}
+
+}  // namespace weft::capture

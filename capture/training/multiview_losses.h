@@ -1,0 +1,36 @@
+#pragma once
+// The method's image losses over every view of a frame (the network reads one view; the
+// losses look at all of them), normalised so that their weights do not depend on the
+// image size or the character's units:
+//   L_lm  = Σ_{b,v,m} c_bvm ‖(Π_v(K_bm) − d_bvm) / W_v‖² / Σ c          (W_v: the view's width, px)
+//   L_sil = Σ_{b,v,n} ρ_bvn (D_bv(Π_v(V_bn)) / S)² / Σ ρ               (S: silhouette size, px)
+// c: detection confidence times the character's keypoint mask; D: the distance transform
+// of the view's mask (multiview_supervision.h); n runs over the vertices on the predicted
+// mesh's silhouette in view v, and ρ keeps those whose normal agrees with D's gradient
+// (capture/deformation/losses.h).
+#include <vector>
+
+#include "capture/io/mesh.h"
+#include "capture/training/multiview_supervision.h"
+#include "graph/tensor.h"
+
+namespace weft::capture {
+
+struct LandmarkStatistics {
+  double mean_error_px = 0;  // mean ‖Π(K) − d‖ over detections with confidence ≥ 0.1 (full-image px)
+  int detections = 0;
+};
+
+// keypoints [B,25,3] world; frames: each sample's frame; keypoint_mask: 25 values (0/1).
+Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& frames,
+                               const MultiviewSupervision& supervision, const std::vector<double>& keypoint_mask,
+                               LandmarkStatistics* statistics = nullptr);
+
+// vertices [B,V,3] world (body and cloth together), faces of that mesh.
+Tensor multiview_silhouette_loss(const Tensor& vertices, const Faces& faces, const std::vector<int>& frames,
+                                 const MultiviewSupervision& supervision);
+
+// A batch's vertices as plain Eigen (sample b of [B,V,3]).
+Vertices sample_vertices(const Tensor& vertices, int64_t b);
+
+}  // namespace weft::capture

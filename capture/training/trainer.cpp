@@ -1,0 +1,583 @@
+#include "capture/training/trainer.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "capture/character/skeletool_io.h"
+#include "capture/deformation/losses.h"
+#include "capture/io/atomic_file.h"
+#include "capture/io/portable_random.h"
+#include "capture/render/renderer.h"
+#include "capture/studio/garment_simulator.h"
+#include "capture/training/capture_networks.h"
+#include "capture/training/loss_log.h"
+#include "capture/training/multiview_losses.h"
+#include "graph/autograd.h"
+#include "graph/error.h"
+#include "nn/checkpoint.h"
+#include "nn/optim.h"
+#include "nn/schedule.h"
+#include "ops/geometry.h"
+#include "ops/ops.h"
+#include "physics/body_mesh.h"
+#include "physics/simulation_window.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  WEFT_CHECK(in.good(), path, ": cannot open");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string checkpoint_file(int64_t step) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "step_%07lld.safetensors", static_cast<long long>(step));
+  return buf;
+}
+
+// The run's checkpoints, oldest first.
+std::vector<std::pair<int64_t, fs::path>> list_checkpoints(const fs::path& dir) {
+  std::vector<std::pair<int64_t, fs::path>> out;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string n = e.path().filename().string();
+    long long step = 0;
+    char tail[32] = {0};
+    if (std::sscanf(n.c_str(), "step_%lld.%31s", &step, tail) == 2 && std::string(tail) == "safetensors")
+      out.emplace_back(step, e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+bool all_finite(const nn::Module& m) {
+  for (const nn::NamedTensor& p : m.named_parameters()) {
+    const float* d = p.tensor.data<float>();
+    for (int64_t i = 0; i < p.tensor.numel(); ++i)
+      if (!std::isfinite(d[i])) return false;
+  }
+  return true;
+}
+
+// The body and the cloth as one mesh (the silhouette is of both).
+Faces combined_faces(const Character& ch) {
+  const Faces& fb = ch.body.mesh.F;
+  if (!ch.has_cloth()) return fb;
+  const Faces& fc = ch.cloth->mesh.F;
+  Faces f(fb.rows() + fc.rows(), 3);
+  f << fb, (fc.array() + int(ch.body.mesh.num_vertices())).matrix();
+  return f;
+}
+
+class Trainer {
+ public:
+  Trainer(const TrainOptions& options, const TrainingConfig& config)
+      : options_(options), cfg_(config), info_(read_dataset_info(options.data)),
+        character_(load_character(info_.character)), model_(character_, cfg_.network),
+        nets_(character_, cfg_.network, cfg_.seed), faces_(combined_faces(character_)) {
+    DatasetOptions d;
+    d.input_size = cfg_.network.input_size;
+    d.margin = cfg_.network.margin;
+    d.split = "train";
+    train_ = std::make_unique<SyntheticDataset>(options.data, d);
+    WEFT_CHECK(!train_->frames().empty(), options.data, "/dataset.yaml: the train split is empty");
+    std::vector<int> frames = train_->frames();
+    if (info_.splits.count("val") && !info_.splits.at("val").empty()) {
+      d.split = "val";
+      val_ = std::make_unique<SyntheticDataset>(options.data, d);
+      frames.insert(frames.end(), val_->frames().begin(), val_->frames().end());
+    }
+    supervision_ = std::make_unique<MultiviewSupervision>(info_, frames, cfg_.silhouette_size);
+    body_arap_ = arap_terms(character_.body.graph, DType::F32);
+    if (character_.has_cloth()) {
+      cloth_arap_ = arap_terms(character_.cloth->graph, DType::F32);
+      attachment_ = attachment_terms(character_.attachment, DType::F32);
+    }
+    const fs::path gt = fs::path(options.data) / "gt" / "pose.motion";
+    if (fs::exists(gt)) {
+      const Motion motion = read_motion(gt.string(), int(character_.rest_dofs.size()));
+      for (int f : frames)
+        if (f < motion.num_frames())
+          gt_keypoints_[f] = pose_character(character_, motion.dofs.row(f).transpose()).body25;
+    }
+    spdlog::info("data: {} ({} train frames, {} val, {} views, {}×{}); character {}: {} body + {} cloth vertices, "
+                 "{} + {} graph nodes, {} regressed dofs",
+                 options.data, train_->frames().size(), val_ ? val_->frames().size() : 0, info_.views.size(),
+                 info_.image_width, info_.image_height, character_.name, character_.body.mesh.num_vertices(),
+                 character_.has_cloth() ? character_.cloth->mesh.num_vertices() : 0, character_.body.graph.num_nodes(),
+                 character_.has_cloth() ? character_.cloth->graph.num_nodes() : 0,
+                 model_.parametrisation().free_dofs.size());
+    spdlog::info("networks: 2 × {} at {}², {:.1f} M parameters", cfg_.network.backbone, cfg_.network.input_size,
+                 nets_.num_parameters() / 1e6);
+  }
+
+  TrainSummary run(const std::function<void(const TrainProgress&)>& progress);
+  ValidationReport validate(const SyntheticDataset& split, int samples);
+  CaptureNetworks& networks() { return nets_; }
+
+ private:
+  struct StepResult {
+    std::map<std::string, double> terms;
+    int windows = 0, failures = 0;
+    std::map<std::string, int> failure_statuses;  // the first failed step's status per failed window
+  };
+  std::unique_ptr<nn::Optimizer> make_optimizer(const StageConfig& stage) {
+    nn::AdamWOptions o;
+    o.lr = stage.lr;
+    o.weight_decay = stage.weight_decay;
+    const auto& net = stage.kind == StageKind::pose ? nets_.pose_net : nets_.deformation_net;
+    std::vector<nn::NamedTensor> params;
+    const std::string prefix = stage.kind == StageKind::pose ? "pose_net." : "deformation_net.";
+    for (nn::NamedTensor p : net->named_parameters()) params.push_back({prefix + p.name, p.tensor});
+    return std::make_unique<nn::AdamW>(std::move(params), o);
+  }
+  std::vector<std::vector<KeypointView>> frame_views(const std::vector<int>& frames) const {
+    std::vector<std::vector<KeypointView>> out(frames.size());
+    for (size_t b = 0; b < frames.size(); ++b)
+      for (int v = 0; v < supervision_->views(); ++v)
+        out[b].push_back({supervision_->camera(frames[b], v), supervision_->detections(frames[b], v)});
+    return out;
+  }
+  CapturePrediction forward(const Batch& batch, StageKind stage, bool training);
+  std::map<std::string, Tensor> image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
+                                                            const LossWeights& w, LandmarkStatistics* stats);
+  StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch);
+  Batch physics_batch(int64_t step, const StageConfig& stage, std::vector<int>* window_starts);
+  Tensor simulation_term(const CapturePrediction& p, int windows, StepResult& result);
+  void save(int64_t step, const StageConfig& stage, const nn::Optimizer& opt);
+
+  TrainOptions options_;
+  TrainingConfig cfg_;
+  DatasetInfo info_;
+  Character character_;
+  CaptureModel model_;
+  CaptureNetworks nets_;
+  Faces faces_;
+  std::unique_ptr<SyntheticDataset> train_, val_;
+  std::unique_ptr<MultiviewSupervision> supervision_;
+  ArapTerms body_arap_, cloth_arap_;
+  AttachmentTerms attachment_;
+  std::map<int, Vertices> gt_keypoints_;
+  physics::SimulatorFactory simulator_;
+  std::vector<int> window_starts_;  // train frames that start F consecutive train frames
+};
+
+CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool training) {
+  std::vector<Camera> inputs = batch.cameras;
+  const SampleViews views = sample_views(inputs, frame_views(batch.frames), model_.keypoint_mask(), DType::F32);
+  const bool train_pose = training && stage == StageKind::pose;
+  nets_.pose_net->train(train_pose);
+  Tensor pose_out;
+  if (train_pose) {
+    pose_out = nets_.pose_net->forward(batch.images);
+  } else {
+    NoGradGuard no_grad;
+    pose_out = nets_.pose_net->forward(batch.images);
+  }
+  Tensor def_out;
+  if (stage != StageKind::pose) {
+    nets_.deformation_net->train(training);
+    def_out = nets_.deformation_net->forward(batch.images);
+  }
+  return model_.predict(pose_out, def_out, views, stage != StageKind::pose);
+}
+
+std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
+                                                                   const LossWeights& w, LandmarkStatistics* stats) {
+  std::map<std::string, Tensor> t;
+  const double m2 = character_.metres_per_unit * character_.metres_per_unit;  // units² → m²
+  if (w.landmarks > 0 || stats)
+    t["landmarks"] = multiview_landmark_loss(p.keypoints, batch.frames, *supervision_, model_.keypoint_mask(), stats);
+  if (w.silhouette > 0) {
+    const Tensor all = p.cloth.defined() ? ops::concat({p.body, p.cloth}, 1) : p.body;
+    t["silhouette"] = multiview_silhouette_loss(all, faces_, batch.frames, *supervision_);
+  }
+  if (w.arap > 0 && p.body_rotations.defined()) {
+    Tensor a = ops::scale(arap_loss(body_arap_, p.body_rotations, p.body_translations),
+                          m2 / std::max<int64_t>(1, body_arap_.edges.size(0)));
+    if (p.cloth_rotations.defined())
+      a = ops::add(a, ops::scale(arap_loss(cloth_arap_, p.cloth_rotations, p.cloth_translations),
+                                 m2 / std::max<int64_t>(1, cloth_arap_.edges.size(0))));
+    t["arap"] = a;
+  }
+  if (w.attachment > 0 && p.cloth.defined() && attachment_.anchors.numel() > 0)
+    t["attachment"] = ops::scale(attachment_loss(attachment_, p.cloth, p.body), m2 / attachment_.anchors.numel());
+  return t;
+}
+
+// The physics stage's batch: `windows` runs of F consecutive train frames, each seen from
+// one view, drawn from (seed, step) alone so a resumed run draws the same.
+Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, std::vector<int>* starts) {
+  const int F = cfg_.physics.window_frames;
+  const int windows = std::max(1, stage.batch_size / F);
+  PortableRandom rng(mix_seed(cfg_.seed, 0x5157, uint64_t(step)));
+  std::vector<std::pair<int, std::string>> keys;
+  for (int w = 0; w < windows; ++w) {
+    const int start = window_starts_[std::min<size_t>(window_starts_.size() - 1,
+                                                      size_t(rng.uniform() * window_starts_.size()))];
+    const std::string& view = info_.views[std::min<size_t>(info_.views.size() - 1, size_t(rng.uniform() * info_.views.size()))];
+    starts->push_back(start);
+    for (int j = 0; j < F; ++j) keys.emplace_back(start + j, view);
+  }
+  std::vector<Sample> samples(keys.size());
+  tbb::parallel_for(size_t(0), keys.size(), [&](size_t i) { samples[i] = train_->load(keys[i].first, keys[i].second); });
+  return make_batch(samples);
+}
+
+Tensor Trainer::simulation_term(const CapturePrediction& p, int windows, StepResult& r) {
+  const int F = cfg_.physics.window_frames;
+  const double mpu = character_.metres_per_unit;
+  std::vector<physics::SimulationWindow> sims(windows);
+  const std::vector<int> pins = garment_pin_vertices(character_);
+  for (int w = 0; w < windows; ++w) {
+    physics::SimulationWindow& s = sims[w];
+    s.x_prev2 = to_positions(sample_vertices(p.cloth, w * F), mpu);
+    s.x_prev = to_positions(sample_vertices(p.cloth, w * F + 1), mpu);
+    s.frames = F - 2;
+    for (int j = 1; j < F; ++j) s.body.push_back(Eigen::MatrixX3d(sample_vertices(p.body, w * F + j) * mpu));
+    s.pin_vertices = pins;
+    for (int j = 2; j < F; ++j) s.pin_targets.push_back(garment_pin_targets(character_, sample_vertices(p.cloth, w * F + j)));
+  }
+  const auto results = physics::simulate_windows(simulator_, sims);
+  std::vector<int64_t> rows;
+  std::vector<double> target;
+  for (int w = 0; w < windows; ++w) {
+    bool ok = true;
+    for (const physics::StepResult& s : results[w]) ok &= s.status == physics::StepStatus::converged && s.x.allFinite();
+    ++r.windows;
+    if (!ok) {
+      ++r.failures;
+      for (const physics::StepResult& st : results[w])
+        if (st.status != physics::StepStatus::converged) {
+          ++r.failure_statuses[physics::to_string(st.status)];
+          break;
+        }
+      continue;
+    }
+    for (int j = 2; j < F; ++j) {
+      rows.push_back(w * F + j);
+      const physics::Positions& x = results[w][j - 2].x;
+      for (int64_t i = 0; i < x.size(); ++i) target.push_back(x[i] / mpu);
+    }
+  }
+  if (rows.empty()) return Tensor();
+  const int64_t n = rows.size(), V = p.cloth.size(1);
+  const Tensor predicted = ops::index_select(p.cloth, 0, Tensor::from_indices({n}, rows));
+  const Tensor d = ops::sub(predicted, Tensor::from_data({n, V, 3}, target, DType::F32));
+  // Mean squared distance per vertex (m²).
+  return ops::scale(ops::mean(ops::mul(d, d)), 3.0 * mpu * mpu);
+}
+
+Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt,
+                                        const Batch& batch) {
+  StepResult r;
+  const CapturePrediction p = forward(batch, stage.kind, true);
+  LandmarkStatistics stats;
+  std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
+  if (stage.kind == StageKind::physics && stage.weights.simulation > 0) {
+    const Tensor sim = simulation_term(p, batch.size() / cfg_.physics.window_frames, r);
+    if (sim.defined()) terms["simulation"] = sim;
+  }
+  Tensor total;
+  const std::map<std::string, double> weights = {{"landmarks", stage.weights.landmarks},
+                                                 {"silhouette", stage.weights.silhouette},
+                                                 {"arap", stage.weights.arap},
+                                                 {"attachment", stage.weights.attachment},
+                                                 {"simulation", stage.weights.simulation}};
+  for (const auto& [name, t] : terms) {
+    const double v = t.item();
+    if (!std::isfinite(v))
+      fail(options_.run, ": step ", step, " (stage ", stage_name(stage.kind), "): the ", name, " loss is ", v,
+           "; stopping before it reaches the networks (the last checkpoint is intact)");
+    r.terms[name] = v;
+    const double w = weights.at(name);
+    if (w <= 0) continue;
+    const Tensor wt = ops::scale(t, w);
+    total = total.defined() ? ops::add(total, wt) : wt;
+  }
+  r.terms["keypoint_px"] = stats.mean_error_px;
+  if (stage.kind == StageKind::physics) r.terms["sim_failures"] = r.failures;
+  WEFT_CHECK(total.defined(), cfg_.file, ": stages.", stage_name(stage.kind), ": every loss weight is 0");
+  r.terms["total"] = total.item();
+  opt.zero_grad();
+  total.backward();
+  opt.step();
+  return r;
+}
+
+void Trainer::save(int64_t step, const StageConfig& stage, const nn::Optimizer& opt) {
+  WEFT_CHECK(all_finite(nets_), options_.run, ": step ", step,
+             ": a network parameter is not finite; not writing a checkpoint (the last one is intact)");
+  const fs::path dir = fs::path(options_.run) / "checkpoints";
+  fs::create_directories(dir);
+  nn::save_checkpoint((dir / checkpoint_file(step)).string(), nets_, &opt, step, nullptr,
+                      {{"weft.stage", stage_name(stage.kind)}, {"weft.backbone", cfg_.network.backbone}});
+  auto all = list_checkpoints(dir);
+  while (int(all.size()) > cfg_.keep_checkpoints) {
+    fs::remove(all.front().second);
+    all.erase(all.begin());
+  }
+}
+
+ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
+  ValidationReport rep;
+  const int n = std::min(samples, split.size());
+  std::vector<int> indices;
+  for (int i = 0; i < n; ++i) indices.push_back(int((int64_t(i) * split.size()) / n));
+  double kp_sum = 0, joint_sum = 0, iou_sum = 0, pen_sum = 0;
+  int kp_n = 0, joint_n = 0, iou_n = 0, pen_n = 0, cloth_n = 0;
+  std::vector<std::array<int, 3>> body_faces(character_.body.mesh.num_faces());
+  for (int i = 0; i < character_.body.mesh.num_faces(); ++i)
+    body_faces[i] = {character_.body.mesh.F(i, 0), character_.body.mesh.F(i, 1), character_.body.mesh.F(i, 2)};
+  const double mpu = character_.metres_per_unit;
+  for (int first = 0; first < n; first += 8) {
+    std::vector<Sample> s(std::min(8, n - first));
+    tbb::parallel_for(size_t(0), s.size(), [&](size_t i) { s[i] = split.load(indices[first + i]); });
+    const Batch batch = make_batch(s);
+    NoGradGuard no_grad;
+    const CapturePrediction p = forward(batch, StageKind::warmup, false);
+    LandmarkStatistics stats;
+    multiview_landmark_loss(p.keypoints, batch.frames, *supervision_, model_.keypoint_mask(), &stats);
+    kp_sum += stats.mean_error_px * stats.detections;
+    kp_n += stats.detections;
+    for (int b = 0; b < batch.size(); ++b) {
+      const int frame = batch.frames[b];
+      const Vertices K = sample_vertices(p.keypoints, b);
+      if (const auto it = gt_keypoints_.find(frame); it != gt_keypoints_.end())
+        for (int m = 0; m < kBody25Count; ++m)
+          if (model_.keypoint_mask()[m] > 0 && it->second.row(m).allFinite())
+            joint_sum += (K.row(m) - it->second.row(m)).norm() * mpu * 1000, ++joint_n;
+      const Vertices body = sample_vertices(p.body, b);
+      Vertices cloth;
+      if (p.cloth.defined()) cloth = sample_vertices(p.cloth, b);
+      std::vector<double> ious(supervision_->views());
+      tbb::parallel_for(0, supervision_->views(), [&](int v) {
+        std::vector<RenderMesh> meshes(1);
+        meshes[0].mesh = &character_.body.mesh;
+        meshes[0].vertices = &body;
+        if (p.cloth.defined()) {
+          meshes.emplace_back();
+          meshes[1].mesh = &character_.cloth->mesh;
+          meshes[1].vertices = &cloth;
+          meshes[1].part = 2;
+        }
+        const Camera& cam = supervision_->silhouette_camera(frame, v);
+        bool visible = true;
+        for (int i = 0; i < body.rows() && visible; ++i) visible = cam.depth(body.row(i).transpose()) > 1e-6;
+        ious[v] = visible ? mask_iou(render(cam, meshes).mask, supervision_->mask(frame, v)) : 0.0;
+      });
+      for (double x : ious) iou_sum += x, ++iou_n;
+      if (p.cloth.defined()) {
+        const physics::BodyMesh obstacle(Eigen::MatrixX3d(body * mpu), body_faces, character_.inactive_body_faces);
+        for (int i = 0; i < cloth.rows(); ++i) {
+          const physics::ClosestPoint c = obstacle.closest_point(cloth.row(i).transpose() * mpu);
+          ++cloth_n;
+          if (c.face >= 0 && c.distance < 0) {
+            pen_sum += -c.distance * 1000, ++pen_n;
+            rep.penetration_max_mm = std::max(rep.penetration_max_mm, -c.distance * 1000);
+          }
+        }
+      }
+    }
+  }
+  rep.samples = n;
+  rep.keypoint_error_px = kp_n ? kp_sum / kp_n : 0;
+  rep.joint_error_mm = joint_n ? joint_sum / joint_n : -1;
+  rep.silhouette_iou = iou_n ? iou_sum / iou_n : 0;
+  rep.penetration_mean_mm = pen_n ? pen_sum / pen_n : 0;
+  rep.penetrating_fraction = cloth_n ? double(pen_n) / cloth_n : 0;
+  return rep;
+}
+
+void append_validation(const fs::path& path, const ValidationReport& r) {
+  const bool fresh = !fs::exists(path);
+  std::ofstream out(path, std::ios::app);
+  if (fresh)
+    out << "step,samples,keypoint_error_px,joint_error_mm,silhouette_iou,penetration_mean_mm,penetration_max_mm,"
+           "penetrating_fraction\n";
+  out << r.step << ',' << r.samples << ',' << r.keypoint_error_px << ',' << r.joint_error_mm << ','
+      << r.silhouette_iou << ',' << r.penetration_mean_mm << ',' << r.penetration_max_mm << ','
+      << r.penetrating_fraction << '\n';
+}
+
+void log_validation(const ValidationReport& r) {
+  spdlog::info("validation at step {}: {} samples, keypoints {:.2f} px, joints {:.1f} mm, silhouette IoU {:.4f}, "
+               "penetration mean {:.2f} mm max {:.2f} mm ({:.2f} % of cloth vertices)",
+               r.step, r.samples, r.keypoint_error_px, r.joint_error_mm, r.silhouette_iou, r.penetration_mean_mm,
+               r.penetration_max_mm, 100 * r.penetrating_fraction);
+}
+
+TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progress) {
+  TrainSummary summary;
+  const fs::path run(options_.run), ckdir = run / "checkpoints";
+  // Where to start.
+  int64_t done = 0;
+  std::unique_ptr<nn::Optimizer> opt;
+  const StageConfig* stage = nullptr;
+  const auto existing = list_checkpoints(ckdir);
+  if (options_.resume && !existing.empty()) {
+    const fs::path& last = existing.back().second;
+    const nn::SafetensorsFile file = nn::load_safetensors(last.string());
+    const auto it = file.metadata.find("weft.step");
+    WEFT_CHECK(it != file.metadata.end(), last.string(), ": not a training checkpoint (no weft.step)");
+    const int64_t step = std::stoll(it->second);
+    WEFT_CHECK(step <= cfg_.total_steps(), last.string(), ": step ", step, " is past this config's ",
+               cfg_.total_steps(), " steps");
+    stage = &cfg_.stage_of(std::max<int64_t>(step, 1));
+    opt = make_optimizer(*stage);
+    done = nn::load_checkpoint(last.string(), nets_, opt.get(), nullptr).step;
+    spdlog::info("resuming {} at step {} (stage {})", last.string(), done + 1, stage_name(stage->kind));
+  } else if (options_.resume) {
+    spdlog::info("{}: no checkpoint yet: starting from step 1", ckdir.string());
+  }
+  LossLog log((run / "losses.csv").string(), options_.resume ? done : -1);
+  if (!options_.resume) fs::remove(run / "validation.csv");
+  const int64_t total = cfg_.total_steps();
+  const int64_t last_step = options_.stop_after >= 0 ? std::min(total, options_.stop_after) : total;
+  summary.first_step = done + 1;
+  const auto t0 = Clock::now();
+  std::unique_ptr<DatasetPrefetcher> prefetcher;
+  const StageConfig* prefetcher_stage = nullptr;
+  const StageConfig* setup_stage = nullptr;
+  for (int64_t step = done + 1; step <= last_step; ++step) {
+    int64_t stage_start = 0;
+    const StageConfig& s = cfg_.stage_of(step, &stage_start);
+    if (&s != setup_stage) {
+      if (&s != stage || !opt) {  // a new stage gets a fresh optimiser; a resumed one keeps the loaded
+        if (stage) spdlog::info("stage {} done at step {}", stage_name(stage->kind), step - 1);
+        stage = &s;
+        opt = make_optimizer(s);
+      }
+      setup_stage = &s;
+      spdlog::info("stage {}: steps {}–{}, batch {}, lr {}", stage_name(s.kind), stage_start + 1,
+                   stage_start + s.steps, s.batch_size, s.lr);
+      if (s.kind == StageKind::physics) {
+        WEFT_CHECK(character_.has_cloth(), info_.character, ": the physics stage needs a garment");
+        const SynthConfig synth = load_synth_config(cfg_.physics.synth_config);
+        SynthSimulationConfig sim = synth.simulation;
+        sim.max_iterations = cfg_.physics.max_iterations;
+        sim.tolerance = cfg_.physics.tolerance;
+        simulator_ = garment_simulator_factory(character_, sim, info_.fps);
+        const std::vector<int>& fr = train_->frames();
+        const int F = cfg_.physics.window_frames;
+        window_starts_.clear();
+        for (size_t i = 0; i + F <= fr.size(); ++i)
+          if (fr[i + F - 1] == fr[i] + F - 1) window_starts_.push_back(fr[i]);
+        WEFT_CHECK(!window_starts_.empty(), options_.data, ": the train split has no run of ", F,
+                   " consecutive frames (physics.window_frames)");
+      }
+    }
+    const nn::CosineLR schedule(s.lr, s.steps, s.lr * s.final_lr_fraction);
+    opt->set_lr(schedule.lr(step - stage_start - 1));
+
+    Batch batch;
+    if (s.kind == StageKind::physics) {
+      std::vector<int> starts;
+      batch = physics_batch(step, s, &starts);
+    } else {
+      if (prefetcher_stage != &s) {
+        prefetcher.reset();
+        PrefetchOptions po;
+        po.batch_size = s.batch_size;
+        po.seed = mix_seed(cfg_.seed, uint64_t(s.kind), 0xBA7C);
+        po.loader_threads = cfg_.loader_threads;
+        po.drop_last = train_->size() >= s.batch_size;
+        po.first_batch = step - stage_start - 1;
+        prefetcher = std::make_unique<DatasetPrefetcher>(*train_, po);
+        prefetcher_stage = &s;
+      }
+      batch = prefetcher->next();
+    }
+    const StepResult r = train_step(step, s, *opt, batch);
+    summary.simulation_windows += r.windows;
+    summary.simulation_failures += r.failures;
+    for (const auto& [status, count] : r.failure_statuses) summary.failure_statuses[status] += count;
+    LossRow row;
+    row.step = step;
+    row.stage = stage_name(s.kind);
+    row.terms = r.terms;
+    row.terms["lr"] = opt->lr();
+    log.append(row);
+    if (progress) progress({step, total, row.stage, r.terms});
+    if (step % cfg_.log_every == 0 || step == last_step) {
+      std::string msg;
+      for (const auto& [k, v] : r.terms) msg += fmt::format(" {} {:.4g}", k, v);
+      spdlog::info("step {}/{} [{}]{} ({:.2f} s/step)", step, total, row.stage, msg,
+                   seconds_since(t0) / double(step - done));
+    }
+    const bool stage_end = step == stage_start + s.steps;
+    if (step % cfg_.checkpoint_every == 0 || stage_end || step == last_step) save(step, s, *opt);
+    if ((cfg_.validate_every > 0 && step % cfg_.validate_every == 0) || step == total) {
+      if (val_) {
+        ValidationReport v = validate(*val_, cfg_.validation_samples);
+        v.step = step;
+        append_validation(run / "validation.csv", v);
+        log_validation(v);
+        summary.last_validation = v;
+      }
+    }
+    if (step % 25 == 0 || stage_end || step == last_step) plot_losses(log.rows(), (run / "losses.png").string());
+  }
+  summary.last_step = last_step;
+  summary.seconds = seconds_since(t0);
+  if (last_step == total) nn::save_weights((run / "model.safetensors").string(), nets_);
+  return summary;
+}
+
+}  // namespace
+
+TrainSummary train(const TrainOptions& options, const std::function<void(const TrainProgress&)>& progress) {
+  const TrainingConfig cfg = load_training_config(options.config);
+  const fs::path run(options.run);
+  const fs::path saved = run / "config.yaml";
+  if (!options.resume && fs::exists(run / "checkpoints") && !list_checkpoints(run / "checkpoints").empty())
+    fail(options.run, ": already holds a run (checkpoints/); pass --resume to continue it or choose another folder");
+  fs::create_directories(run);
+  const std::string text = read_text(options.config);
+  if (options.resume && fs::exists(saved)) {
+    WEFT_CHECK(read_text(saved.string()) == text, options.config, ": differs from ", saved.string(),
+               ", the config the run was started with; resume with that one");
+  } else {
+    write_text_atomically(saved.string(), text);
+  }
+  Trainer trainer(options, cfg);
+  return trainer.run(progress);
+}
+
+ValidationReport validate_checkpoint(const std::string& config, const std::string& data, const std::string& weights,
+                                     const std::string& split, int samples) {
+  TrainOptions o;
+  o.config = config;
+  o.data = data;
+  const TrainingConfig cfg = load_training_config(config);
+  Trainer trainer(o, cfg);
+  nn::load_weights(weights, trainer.networks(), false);
+  DatasetOptions d;
+  d.input_size = cfg.network.input_size;
+  d.margin = cfg.network.margin;
+  d.split = split;
+  const SyntheticDataset ds(data, d);
+  return trainer.validate(ds, samples);
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,132 @@
+#include "capture/training/training_config.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "capture/io/strict_yaml.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+const char* stage_name(StageKind kind) {
+  switch (kind) {
+    case StageKind::pose: return "pose";
+    case StageKind::warmup: return "warmup";
+    case StageKind::physics: return "physics";
+  }
+  return "?";
+}
+
+int TrainingConfig::total_steps() const {
+  int n = 0;
+  for (const StageConfig& s : stages) n += s.steps;
+  return n;
+}
+
+const StageConfig& TrainingConfig::stage_of(int64_t step, int64_t* stage_start) const {
+  int64_t start = 0;
+  for (const StageConfig& s : stages) {
+    if (step <= start + s.steps) {
+      if (stage_start) *stage_start = start;
+      return s;
+    }
+    start += s.steps;
+  }
+  fail(file, ": step ", step, " is past the last stage (", total_steps(), " steps in all)");
+}
+
+namespace {
+
+void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
+  const std::string where = std::string("stages.") + stage_name(s.kind) + ".";
+  y.numbers(n, where,
+            {{"lr", &s.lr, 0, 10},
+             {"weight_decay", &s.weight_decay, 0, 10},
+             {"final_lr_fraction", &s.final_lr_fraction, 0, 1},
+             {"landmarks", &s.weights.landmarks, 0, 1e9},
+             {"silhouette", &s.weights.silhouette, 0, 1e9},
+             {"arap", &s.weights.arap, 0, 1e9},
+             {"attachment", &s.weights.attachment, 0, 1e9},
+             {"simulation", &s.weights.simulation, 0, 1e9}},
+            {{"steps", &s.steps, 0, 1e8}, {"batch_size", &s.batch_size, 1, 4096}}, {});
+  if (s.kind == StageKind::pose && (s.weights.silhouette > 0 || s.weights.arap > 0 || s.weights.attachment > 0 ||
+                                    s.weights.simulation > 0))
+    y.fail_at(n, where + "landmarks", "the pose stage trains PoseNet on landmarks only: other weights must be 0");
+  if (s.kind == StageKind::warmup && s.weights.simulation > 0)
+    y.fail_at(n["simulation"], where + "simulation", "the warm start has no simulation loss (that is the physics stage)");
+}
+
+}  // namespace
+
+TrainingConfig parse_training_config(const std::string& text, const std::string& name) {
+  StrictYaml y;
+  y.file = name;
+  y.dir = fs::path(name).parent_path();
+  const YAML::Node root = y.parse(text);
+  if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
+  y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
+                          "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
+                          "physics"});
+  TrainingConfig c;
+  c.file = name;
+  if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
+  y.numbers(root, "", {},
+            {{"silhouette_size", &c.silhouette_size, 16, 4096},
+             {"loader_threads", &c.loader_threads, 0, 64},
+             {"log_every", &c.log_every, 1, 1e8},
+             {"validate_every", &c.validate_every, 0, 1e8},
+             {"validation_samples", &c.validation_samples, 1, 1e6},
+             {"checkpoint_every", &c.checkpoint_every, 1, 1e8},
+             {"keep_checkpoints", &c.keep_checkpoints, 1, 1000}},
+            {"seed", "network", "stages", "physics"});
+  if (const YAML::Node n = root["network"]) {
+    NetworkConfig& m = c.network;
+    y.numbers(n, "network.",
+              {{"margin", &m.margin, 0, 2},
+               {"dof_scale", &m.dof_scale, 1e-6, 100},
+               {"angle_scale", &m.angle_scale, 1e-6, 100},
+               {"translation_scale_m", &m.translation_scale_m, 1e-6, 100}},
+              {{"input_size", &m.input_size, 32, 1024}}, {"backbone"});
+    if (n["backbone"]) {
+      m.backbone = y.get<std::string>(n["backbone"], "network.backbone", "resnet18, resnet34 or resnet50");
+      if (m.backbone != "resnet18" && m.backbone != "resnet34" && m.backbone != "resnet50")
+        y.fail_at(n["backbone"], "network.backbone", "expected resnet18, resnet34 or resnet50, found '" + m.backbone + "'");
+    }
+  }
+  for (StageKind kind : {StageKind::pose, StageKind::warmup, StageKind::physics}) {
+    StageConfig s;
+    s.kind = kind;
+    c.stages.push_back(s);
+  }
+  if (!root["stages"]) y.fail_at(root, "stages", "missing: the stages section (pose, warmup, physics)");
+  const YAML::Node st = root["stages"];
+  y.check_keys(st, "stages.", {"pose", "warmup", "physics"});
+  for (StageConfig& s : c.stages)
+    if (const YAML::Node n = st[stage_name(s.kind)]) parse_stage(y, n, s);
+  if (c.total_steps() == 0) y.fail_at(st, "stages", "every stage has 0 steps: nothing to train");
+  if (const YAML::Node n = root["physics"]) {
+    PhysicsConfig& p = c.physics;
+    y.numbers(n, "physics.", {{"tolerance", &p.tolerance, 1e-8, 10}},
+              {{"window_frames", &p.window_frames, 3, 64}, {"max_iterations", &p.max_iterations, 1, 10000}},
+              {"synth_config"});
+    if (n["synth_config"]) p.synth_config = y.path(n["synth_config"], "physics.synth_config");
+  }
+  const StageConfig& physics = c.stages[2];
+  if (physics.steps > 0 && c.physics.synth_config.empty())
+    y.fail_at(root, "physics.synth_config",
+              "missing: the physics stage simulates the garment with the simulation section of a synth config");
+  return c;
+}
+
+TrainingConfig load_training_config(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  WEFT_CHECK(in.good(), path, ": cannot open the training config");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_training_config(ss.str(), path);
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,76 @@
+#pragma once
+// The config of `weft train` (configs/train/*.yaml, every key in docs/TRAINING.md): the
+// networks, the three stages of the method with their loss weights, validation,
+// checkpoints and the simulator of the physics-aware stage. Read strictly: an unknown
+// key, a wrong type or a value out of range is one weft::Error naming the file, line and key.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "capture/studio/synthetic_studio.h"
+
+namespace weft::capture {
+
+// The loss weights β of one stage (0: the term is not computed).
+struct LossWeights {
+  double landmarks = 0;   // L_lm, over all views of the frame
+  double silhouette = 0;  // L_sil, over all views of the frame
+  double arap = 0;        // L_arap, both embedded graphs
+  double attachment = 0;  // L_att
+  double simulation = 0;  // L_sim
+};
+
+// The stages, in the order they run: (a) PoseNet on L_lm; (b) PADefNet's warm start with
+// PoseNet frozen; (c) the physics-aware stage (PoseNet frozen).
+enum class StageKind { pose, warmup, physics };
+const char* stage_name(StageKind kind);  // "pose", "warmup", "physics"
+
+struct StageConfig {
+  StageKind kind = StageKind::pose;
+  int steps = 0;          // 0 skips the stage
+  int batch_size = 8;     // images per step (physics: windows × window_frames, at least one window)
+  double lr = 1e-3;       // AdamW
+  double weight_decay = 0;
+  double final_lr_fraction = 0.1;  // cosine decay of the rate to this fraction at the stage's end
+  LossWeights weights;
+};
+
+struct NetworkConfig {
+  std::string backbone = "resnet18";  // resnet18 | resnet34 | resnet50
+  int input_size = 128;               // crops are input_size² pixels
+  double margin = 0.15;               // crop margin around the person (dataset reader)
+  double dof_scale = 0.1;             // PoseNet: dof = rest + dof_scale · output (radians, units)
+  double angle_scale = 0.05;          // PADefNet: node Euler angle = angle_scale · output (radians)
+  double translation_scale_m = 0.01;  // PADefNet: node translation = this · output (metres)
+};
+
+struct PhysicsConfig {
+  std::string synth_config;  // the synth config whose `simulation` section sets the simulator
+  int window_frames = 3;     // consecutive frames per window: the first two start the simulator
+  int max_iterations = 30;   // Newton iterations per step in training windows
+  double tolerance = 1e-2;   // looser than ground truth's 1e-3 (relative to a vertex's weight)
+};
+
+struct TrainingConfig {
+  std::string file;
+  uint64_t seed = 0;
+  NetworkConfig network;
+  std::vector<StageConfig> stages;  // pose, warmup, physics (all three, steps may be 0)
+  int silhouette_size = 128;   // distance transforms of every view at this size (longest side, px)
+  int loader_threads = 1;      // TBB threads loading batches ahead
+  int log_every = 10;          // steps between log lines
+  int validate_every = 100;    // steps between validations (0: only at the end)
+  int validation_samples = 32; // val samples (frame, view) per validation, spread over the split
+  int checkpoint_every = 50;   // steps between checkpoints (and one at the end)
+  int keep_checkpoints = 3;    // the last K are kept
+  PhysicsConfig physics;
+
+  int total_steps() const;
+  // The stage of global step `step` (1-based) and the step it starts after.
+  const StageConfig& stage_of(int64_t step, int64_t* stage_start = nullptr) const;
+};
+
+TrainingConfig load_training_config(const std::string& path);
+TrainingConfig parse_training_config(const std::string& yaml_text, const std::string& name);
+
+}  // namespace weft::capture
