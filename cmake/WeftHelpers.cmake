@@ -51,7 +51,7 @@ function(weft_test_folder layer)
       target_link_libraries(${target} PRIVATE ${ARGN} GTest::gtest GTest::gtest_main GTest::gmock)
       weft_precompile(${target} ${WEFT_PCH_COMMON} <gtest/gtest.h>)
       target_compile_definitions(${target} PRIVATE
-        WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+        WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" WEFT_BINARY_DIR="${CMAKE_BINARY_DIR}")
       gtest_discover_tests(${target} TEST_PREFIX "${layer}." DISCOVERY_MODE PRE_TEST
         DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${label})
     endif()
