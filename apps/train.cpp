@@ -10,11 +10,35 @@
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
+#include "capture/io/atomic_file.h"
+#include "capture/training/split_evaluation.h"
 #include "capture/training/trainer.h"
+#include "graph/error.h"
 
 namespace weft::apps {
 
 namespace {
+
+void run_evaluation(const capture::TrainOptions& o, const std::string& split) {
+  namespace fs = std::filesystem;
+  const fs::path model = fs::path(o.run) / "model.safetensors";
+  WEFT_CHECK(fs::exists(model), model.string(), ": no trained model (train the run to its end first)");
+  spdlog::info("evaluating {} on the {} split of {}", model.string(), split, o.data);
+  const capture::SplitEvaluation e = capture::evaluate_split(o.config, o.data, model.string(), split);
+  const std::string out = (fs::path(o.run) / ("evaluation_" + split + ".json")).string();
+  weft::write_text_atomically(out, e.to_json());
+  spdlog::info("{} frames × {} views ({:.1f} s): keypoints {:.2f} px (mean pose with the true root rotation {:.2f}), joints {:.1f} mm, "
+               "articulation {:.1f} mm (mean pose {:.1f}), root rotation {:.1f}°; silhouette IoU {:.4f} (template {:.4f}); cloth {:.1f} mm, "
+               "body {:.1f} mm; penetration {:.2f} mm mean, {:.2f} max, {:.2f} % of cloth vertices; "
+               "out-of-balance {:.3g} N mean ({:.3g} m g), {:.3g} N max ({:.3g} m g) over {} frames",
+               e.frames, e.views, e.seconds, e.keypoint_error_px, e.mean_pose_keypoint_error_px, e.joint_error_mm,
+               e.joint_error_root_aligned_mm, e.mean_pose_joint_error_root_aligned_mm, e.root_rotation_error_deg,
+               e.silhouette_iou,
+               e.template_silhouette_iou, e.cloth_error_mm, e.body_error_mm, e.penetration_mean_mm,
+               e.penetration_max_mm, 100 * e.penetrating_fraction, e.oob_force_mean_n, e.oob_force_mean_rel,
+               e.oob_force_max_n, e.oob_force_max_rel, e.oob_frames);
+  spdlog::info("wrote {}", out);
+}
 
 void run_train(const capture::TrainOptions& o) {
   std::filesystem::create_directories(o.run);
@@ -57,7 +81,17 @@ void add_train_command(CLI::App& app) {
   cmd->add_flag("--resume", o->resume, "Continue the run in --out from its last checkpoint, exactly");
   cmd->add_option("--stop-after", o->stop_after, "Stop after this global step (checkpointed), as if interrupted")
       ->check(CLI::NonNegativeNumber);
-  cmd->callback([o] { run_train(*o); });
+  auto evaluate = std::make_shared<std::string>();
+  cmd->add_option("--evaluate", *evaluate,
+                  "Instead of training: measure RUN/model.safetensors on this split of --data (e.g. test) against "
+                  "its 3D ground truth (keypoints, joints, silhouette IoU, penetration, out-of-balance force); "
+                  "writes RUN/evaluation_SPLIT.json");
+  cmd->callback([o, evaluate] {
+    if (!evaluate->empty())
+      run_evaluation(*o, *evaluate);
+    else
+      run_train(*o);
+  });
 }
 
 }  // namespace weft::apps

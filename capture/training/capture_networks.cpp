@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "capture/character/skeleton.h"
+#include "graph/autograd.h"
 #include "graph/error.h"
 #include "ops/geometry.h"
 #include "ops/ops.h"
@@ -186,6 +187,25 @@ CapturePrediction CaptureModel::predict(const Tensor& pose_output, const Tensor&
     p.cloth = to_world(layer_.deform(*layer_.cloth(), joints, cloth_angles, cloth_translations), rotation_t,
                        p.translation);
   return p;
+}
+
+CapturePrediction predict_batch(CaptureNetworks& nets, const CaptureModel& model, const Batch& batch,
+                                const MultiviewSupervision& sup, Learning learning, bool deformation,
+                                bool with_meshes) {
+  std::vector<std::vector<KeypointView>> views(batch.frames.size());
+  for (size_t b = 0; b < batch.frames.size(); ++b)
+    for (int v = 0; v < sup.views(); ++v)
+      views[b].push_back({sup.camera(batch.frames[b], v), sup.detections(batch.frames[b], v)});
+  const SampleViews placed = sample_views(batch.cameras, views, model.keypoint_mask(), DType::F32);
+  auto run = [&](nn::ResNet& net, bool learns) {
+    net.train(learns);
+    if (learns) return net.forward(batch.images);
+    NoGradGuard no_grad;
+    return net.forward(batch.images);
+  };
+  const Tensor pose_out = run(*nets.pose_net, learning == Learning::pose);
+  const Tensor def_out = deformation ? run(*nets.deformation_net, learning == Learning::deformation) : Tensor();
+  return model.predict(pose_out, def_out, placed, with_meshes);
 }
 
 }  // namespace weft::capture

@@ -20,10 +20,12 @@
 #include <vector>
 
 #include "capture/character/character.h"
+#include "capture/dataset/synthetic_dataset.h"
 #include "capture/deformation/deformation_layer.h"
 #include "capture/deformation/losses.h"
 #include "capture/io/camera.h"
 #include "capture/training/global_pose.h"
+#include "capture/training/multiview_supervision.h"
 #include "capture/training/training_config.h"
 #include "nn/resnet.h"
 
@@ -107,5 +109,19 @@ class CaptureModel {
   Tensor rotation_bias_;  // [6] the identity's 6D vector
   DeformableSurface landmarks_;  // BODY_25 keypoints as points on the body's embedded graph
 };
+
+}  // namespace weft::capture
+
+namespace weft::capture {
+
+// Which network learns in a forward pass (the other runs in evaluation mode, no graph).
+enum class Learning { none, pose, deformation };
+
+// Both networks on a batch, placed in the world by the frames' detections in every view:
+// PoseNet always; PADefNet unless `deformation` is false (then the skinned template).
+// with_meshes: see CaptureModel::predict.
+CapturePrediction predict_batch(CaptureNetworks& networks, const CaptureModel& model, const Batch& batch,
+                                const MultiviewSupervision& supervision, Learning learning, bool deformation,
+                                bool with_meshes = true);
 
 }  // namespace weft::capture

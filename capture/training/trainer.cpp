@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <memory>
 #include <sstream>
 
@@ -39,6 +40,18 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Seconds per part of a step, summed over the steps of a stage.
+struct PartTimes {
+  std::map<std::string, double> seconds;
+  int steps = 0;
+  // Adds the time since `t` to `part` and restarts `t`.
+  void lap(const char* part, Clock::time_point& t) {
+    const auto now = Clock::now();
+    seconds[part] += std::chrono::duration<double>(now - t).count();
+    t = now;
+  }
+};
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -151,19 +164,19 @@ class Trainer {
     for (nn::NamedTensor p : net->named_parameters()) params.push_back({prefix + p.name, p.tensor});
     return std::make_unique<nn::AdamW>(std::move(params), o);
   }
-  std::vector<std::vector<KeypointView>> frame_views(const std::vector<int>& frames) const {
-    std::vector<std::vector<KeypointView>> out(frames.size());
-    for (size_t b = 0; b < frames.size(); ++b)
-      for (int v = 0; v < supervision_->views(); ++v)
-        out[b].push_back({supervision_->camera(frames[b], v), supervision_->detections(frames[b], v)});
-    return out;
-  }
-  CapturePrediction forward(const Batch& batch, StageKind stage, bool training);
+  CapturePrediction forward(const Batch& batch, StageKind stage, bool training, PartTimes* times = nullptr);
   std::map<std::string, Tensor> image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
                                                             const LossWeights& w, LandmarkStatistics* stats);
-  StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch);
-  Batch physics_batch(int64_t step, const StageConfig& stage, std::vector<int>* window_starts);
-  Tensor simulation_term(const CapturePrediction& p, int windows, StepResult& result);
+  StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch,
+                        PartTimes& times);
+  Batch physics_batch(int64_t step, const StageConfig& stage) const;
+  // Rolls the windows' simulations (TBB) and returns what L_sim needs of them.
+  struct SimulatedWindows {
+    std::vector<int64_t> rows;   // batch rows compared with a simulated state
+    std::vector<double> target;  // their simulated states (character units)
+  };
+  SimulatedWindows simulate(const CapturePrediction& p, int windows, StepResult& result);
+  Tensor simulation_term(const CapturePrediction& p, const SimulatedWindows& sims) const;
   void save(int64_t step, const StageConfig& stage, const nn::Optimizer& opt);
 
   TrainOptions options_;
@@ -182,24 +195,14 @@ class Trainer {
   std::vector<int> window_starts_;  // train frames that start F consecutive train frames
 };
 
-CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool training) {
-  std::vector<Camera> inputs = batch.cameras;
-  const SampleViews views = sample_views(inputs, frame_views(batch.frames), model_.keypoint_mask(), DType::F32);
-  const bool train_pose = training && stage == StageKind::pose;
-  nets_.pose_net->train(train_pose);
-  Tensor pose_out;
-  if (train_pose) {
-    pose_out = nets_.pose_net->forward(batch.images);
-  } else {
-    NoGradGuard no_grad;
-    pose_out = nets_.pose_net->forward(batch.images);
-  }
-  Tensor def_out;
-  if (stage != StageKind::pose) {
-    nets_.deformation_net->train(training);
-    def_out = nets_.deformation_net->forward(batch.images);
-  }
-  return model_.predict(pose_out, def_out, views, stage != StageKind::pose);
+CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool training, PartTimes* times) {
+  auto t = Clock::now();
+  const Learning learning =
+      !training ? Learning::none : stage == StageKind::pose ? Learning::pose : Learning::deformation;
+  CapturePrediction p = predict_batch(nets_, model_, batch, *supervision_, learning, stage != StageKind::pose,
+                                      stage != StageKind::pose);
+  if (times) times->lap("networks forward and deformation layer", t);
+  return p;
 }
 
 std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
@@ -227,7 +230,7 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
 
 // The physics stage's batch: `windows` runs of F consecutive train frames, each seen from
 // one view, drawn from (seed, step) alone so a resumed run draws the same.
-Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, std::vector<int>* starts) {
+Batch Trainer::physics_batch(int64_t step, const StageConfig& stage) const {
   const int F = cfg_.physics.window_frames;
   const int windows = std::max(1, stage.batch_size / F);
   PortableRandom rng(mix_seed(cfg_.seed, 0x5157, uint64_t(step)));
@@ -236,7 +239,6 @@ Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, std::vector
     const int start = window_starts_[std::min<size_t>(window_starts_.size() - 1,
                                                       size_t(rng.uniform() * window_starts_.size()))];
     const std::string& view = info_.views[std::min<size_t>(info_.views.size() - 1, size_t(rng.uniform() * info_.views.size()))];
-    starts->push_back(start);
     for (int j = 0; j < F; ++j) keys.emplace_back(start + j, view);
   }
   std::vector<Sample> samples(keys.size());
@@ -244,7 +246,7 @@ Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, std::vector
   return make_batch(samples);
 }
 
-Tensor Trainer::simulation_term(const CapturePrediction& p, int windows, StepResult& r) {
+Trainer::SimulatedWindows Trainer::simulate(const CapturePrediction& p, int windows, StepResult& r) {
   const int F = cfg_.physics.window_frames;
   const double mpu = character_.metres_per_unit;
   std::vector<physics::SimulationWindow> sims(windows);
@@ -259,8 +261,9 @@ Tensor Trainer::simulation_term(const CapturePrediction& p, int windows, StepRes
     for (int j = 2; j < F; ++j) s.pin_targets.push_back(garment_pin_targets(character_, sample_vertices(p.cloth, w * F + j)));
   }
   const auto results = physics::simulate_windows(simulator_, sims);
-  std::vector<int64_t> rows;
-  std::vector<double> target;
+  SimulatedWindows out;
+  std::vector<int64_t>& rows = out.rows;
+  std::vector<double>& target = out.target;
   for (int w = 0; w < windows; ++w) {
     bool ok = true;
     for (const physics::StepResult& s : results[w]) ok &= s.status == physics::StepStatus::converged && s.x.allFinite();
@@ -280,23 +283,37 @@ Tensor Trainer::simulation_term(const CapturePrediction& p, int windows, StepRes
       for (int64_t i = 0; i < x.size(); ++i) target.push_back(x[i] / mpu);
     }
   }
-  if (rows.empty()) return Tensor();
-  const int64_t n = rows.size(), V = p.cloth.size(1);
-  const Tensor predicted = ops::index_select(p.cloth, 0, Tensor::from_indices({n}, rows));
-  const Tensor d = ops::sub(predicted, Tensor::from_data({n, V, 3}, target, DType::F32));
-  // Mean squared distance per vertex (m²).
+  return out;
+}
+
+// L_sim: mean squared distance (m²) per vertex between the predicted and the simulated
+// cloth at the windows' simulated frames; undefined when every window failed.
+Tensor Trainer::simulation_term(const CapturePrediction& p, const SimulatedWindows& sims) const {
+  if (sims.rows.empty()) return Tensor();
+  const double mpu = character_.metres_per_unit;
+  const int64_t n = sims.rows.size(), V = p.cloth.size(1);
+  const Tensor predicted = ops::index_select(p.cloth, 0, Tensor::from_indices({n}, sims.rows));
+  const Tensor d = ops::sub(predicted, Tensor::from_data({n, V, 3}, sims.target, DType::F32));
   return ops::scale(ops::mean(ops::mul(d, d)), 3.0 * mpu * mpu);
 }
 
 Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt,
-                                        const Batch& batch) {
+                                        const Batch& batch, PartTimes& times) {
   StepResult r;
-  const CapturePrediction p = forward(batch, stage.kind, true);
+  const CapturePrediction p = forward(batch, stage.kind, true, &times);
+  auto t = Clock::now();
+  // The simulation runs on TBB threads while this thread computes the image losses.
+  const bool simulating = stage.kind == StageKind::physics && stage.weights.simulation > 0;
+  std::future<SimulatedWindows> simulated;
+  if (simulating)
+    simulated = std::async(std::launch::async, [&] { return simulate(p, batch.size() / cfg_.physics.window_frames, r); });
   LandmarkStatistics stats;
   std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
-  if (stage.kind == StageKind::physics && stage.weights.simulation > 0) {
-    const Tensor sim = simulation_term(p, batch.size() / cfg_.physics.window_frames, r);
+  times.lap("losses", t);
+  if (simulating) {
+    const Tensor sim = simulation_term(p, simulated.get());
     if (sim.defined()) terms["simulation"] = sim;
+    times.lap("simulation (beyond the losses)", t);
   }
   Tensor total;
   const std::map<std::string, double> weights = {{"landmarks", stage.weights.landmarks},
@@ -321,7 +338,10 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   r.terms["total"] = total.item();
   opt.zero_grad();
   total.backward();
+  times.lap("backward", t);
   opt.step();
+  times.lap("optimiser", t);
+  ++times.steps;
   return r;
 }
 
@@ -420,6 +440,25 @@ void append_validation(const fs::path& path, const ValidationReport& r) {
       << r.penetrating_fraction << '\n';
 }
 
+// The mean time per step of each part (the parts add up to the step), logged and kept in
+// RUN/timing_<stage>.json.
+void log_times(const StageConfig& s, const PartTimes& times, const fs::path& run) {
+  if (times.steps == 0) return;
+  double total = 0;
+  for (const auto& [part, sec] : times.seconds) total += sec;
+  std::string line, json = "{\n  \"steps\": " + std::to_string(times.steps) + ",\n  \"ms_per_step\": {";
+  bool first = true;
+  for (const auto& [part, sec] : times.seconds) {
+    line += fmt::format(", {} {:.0f}", part, 1e3 * sec / times.steps);
+    json += fmt::format("{}\n    \"{}\": {:.3f}", first ? "" : ",", part, 1e3 * sec / times.steps);
+    first = false;
+  }
+  json += fmt::format("\n  }},\n  \"total_ms_per_step\": {:.3f}\n}}\n", 1e3 * total / times.steps);
+  spdlog::info("stage {}: {:.0f} ms per step over {} steps: {}", stage_name(s.kind), 1e3 * total / times.steps,
+               times.steps, line.substr(2));
+  write_text_atomically((run / fmt::format("timing_{}.json", stage_name(s.kind))).string(), json);
+}
+
 void log_validation(const ValidationReport& r) {
   spdlog::info("validation at step {}: {} samples, keypoints {:.2f} px, joints {:.1f} mm, silhouette IoU {:.4f}, "
                "penetration mean {:.2f} mm max {:.2f} mm ({:.2f} % of cloth vertices)",
@@ -457,6 +496,9 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
   summary.first_step = done + 1;
   const auto t0 = Clock::now();
   std::unique_ptr<DatasetPrefetcher> prefetcher;
+  std::future<Batch> next_physics;
+  int64_t next_physics_step = -1;
+  std::map<StageKind, PartTimes> stage_times;
   const StageConfig* prefetcher_stage = nullptr;
   const StageConfig* setup_stage = nullptr;
   for (int64_t step = done + 1; step <= last_step; ++step) {
@@ -482,18 +524,24 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
         const int F = cfg_.physics.window_frames;
         window_starts_.clear();
         for (size_t i = 0; i + F <= fr.size(); ++i)
-          if (fr[i + F - 1] == fr[i] + F - 1) window_starts_.push_back(fr[i]);
+          if (fr[i + F - 1] == fr[i] + F - 1 && same_segment(info_, fr[i], fr[i + F - 1])) window_starts_.push_back(fr[i]);
         WEFT_CHECK(!window_starts_.empty(), options_.data, ": the train split has no run of ", F,
-                   " consecutive frames (physics.window_frames)");
+                   " consecutive frames of one clip (physics.window_frames)");
       }
     }
     const nn::CosineLR schedule(s.lr, s.steps, s.lr * s.final_lr_fraction);
     opt->set_lr(schedule.lr(step - stage_start - 1));
 
+    PartTimes& times = stage_times[s.kind];
+    auto t_data = Clock::now();
     Batch batch;
     if (s.kind == StageKind::physics) {
-      std::vector<int> starts;
-      batch = physics_batch(step, s, &starts);
+      // Loaded one step ahead on another thread (a function of the step alone).
+      batch = next_physics.valid() && next_physics_step == step ? next_physics.get() : physics_batch(step, s);
+      if (step + 1 <= std::min(last_step, stage_start + s.steps)) {
+        next_physics_step = step + 1;
+        next_physics = std::async(std::launch::async, [this, step, &s] { return physics_batch(step + 1, s); });
+      }
     } else {
       if (prefetcher_stage != &s) {
         prefetcher.reset();
@@ -508,7 +556,9 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
       }
       batch = prefetcher->next();
     }
-    const StepResult r = train_step(step, s, *opt, batch);
+    times.lap("data (waiting)", t_data);
+    const StepResult r = train_step(step, s, *opt, batch, times);
+    auto t_book = Clock::now();
     summary.simulation_windows += r.windows;
     summary.simulation_failures += r.failures;
     for (const auto& [status, count] : r.failure_statuses) summary.failure_statuses[status] += count;
@@ -537,6 +587,8 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
       }
     }
     if (step % 25 == 0 || stage_end || step == last_step) plot_losses(log.rows(), (run / "losses.png").string());
+    times.lap("log, checkpoint, plot, validation", t_book);
+    if (stage_end || step == last_step) log_times(s, times, run);
   }
   summary.last_step = last_step;
   summary.seconds = seconds_since(t0);

@@ -18,10 +18,12 @@
 #include <sstream>
 #include <thread>
 
+#include "capture/character/skeletool_io.h"
 #include "capture/io/openpose.h"
 #include "capture/studio/synthetic_studio.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/loss_log.h"
+#include "capture/training/multiview_losses.h"
 #include "capture/training/trainer.h"
 #include "nn/checkpoint.h"
 
@@ -236,5 +238,58 @@ TEST(Training, ANonFiniteLossStopsTheRunAndNeverReachesACheckpoint) {
     for (const auto& p : nets.named_parameters())
       for (int64_t i = 0; i < p.tensor.numel(); ++i)
         ASSERT_TRUE(std::isfinite(p.tensor.data<float>()[i])) << entry.path() << ": " << p.name;
+  }
+}
+
+// The networks' parametrisation can say what the ground truth says: PoseNet outputs made
+// from gt/pose.motion (the regressed dofs, and the 6D rotation R_c R_gt C) give back the
+// true root rotation and articulation exactly, and the keypoints to the closed-form
+// translation's accuracy from the noisy detections.
+TEST(CaptureModel, ExpressesTheGroundTruthPose) {
+  SKIP_WITHOUT_HUMAN();
+  const Fixture& f = fixture();
+  const DatasetInfo info = read_dataset_info(f.data.string());
+  const Character ch = load_character(info.character);
+  const TrainingConfig cfg = load_training_config(repo_file("configs/train/tiny.yaml"));
+  const CaptureModel model(ch, cfg.network);
+  const PoseParametrisation& param = model.parametrisation();
+  const Motion motion = read_motion((f.data / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
+  const std::vector<int> frames = {0, 3, 5};
+  const MultiviewSupervision sup(info, frames, 64);
+  const Eigen::Matrix3d rest = forward_kinematics(ch.skeleton, ch.rest_dofs)[param.pivot_joint].linear();
+  const Eigen::Matrix3d C = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  for (int frame : frames) {
+    const PosedCharacter gt = pose_character(ch, motion.dofs.row(frame).transpose());
+    const Eigen::Matrix3d R_gt = gt.joints[param.pivot_joint].linear() * rest.transpose();
+    for (int v : {0, 5}) {
+      const Camera& cam = sup.camera(frame, v);
+      const Eigen::Matrix3d relative = cam.R * R_gt * C;  // R_world = R_cᵀ R(α) C
+      std::vector<double> out;
+      for (int d : param.free_dofs) out.push_back(motion.dofs(frame, d) / cfg.network.dof_scale);
+      for (int c = 0; c < 2; ++c)
+        for (int r = 0; r < 3; ++r) out.push_back(relative(r, c) - (r == c ? 1.0 : 0.0));
+      std::vector<std::vector<KeypointView>> views(1);
+      for (int w = 0; w < sup.views(); ++w) views[0].push_back({sup.camera(frame, w), sup.detections(frame, w)});
+      const SampleViews placed = sample_views({cam}, views, model.keypoint_mask(), weft::DType::F32);
+      const CapturePrediction p = model.predict(
+          weft::Tensor::from_data({1, int64_t(out.size())}, out, weft::DType::F32), weft::Tensor(), placed);
+      Eigen::Matrix3d R;
+      for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = p.rotation.data<float>()[i];
+      EXPECT_LT((R - R_gt).norm(), 1e-5) << "frame " << frame << " view " << v;
+      const Eigen::Vector3d t(p.translation.data<float>()[0], p.translation.data<float>()[1],
+                              p.translation.data<float>()[2]);
+      EXPECT_LT((t - gt.joints[param.pivot_joint].translation()).norm(), 0.02) << "translation, m";
+      const Vertices K = sample_vertices(p.keypoints, 0);
+      for (int m = 0; m < kBody25Count; ++m) {
+        if (model.keypoint_mask()[m] <= 0) continue;
+        const Eigen::Vector3d local = R.transpose() * (K.row(m).transpose() - t);
+        const Eigen::Vector3d gt_local =
+            R_gt.transpose() * (gt.body25.row(m).transpose() - gt.joints[param.pivot_joint].translation());
+        EXPECT_LT((local - gt_local).norm(), 1e-5) << "keypoint " << m << " in the root frame, m";
+      }
+      const Vertices body = sample_vertices(p.body, 0);
+      const Eigen::RowVector3d shift = (t - gt.joints[param.pivot_joint].translation()).transpose();
+      EXPECT_LT(((body.rowwise() - shift) - gt.body).rowwise().norm().maxCoeff(), 1e-4) << "body vertices, m";
+    }
   }
 }
