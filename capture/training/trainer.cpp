@@ -169,7 +169,7 @@ class Trainer {
                                                             const LossWeights& w, LandmarkStatistics* stats);
   StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch,
                         PartTimes& times);
-  Batch physics_batch(int64_t step, const StageConfig& stage) const;
+  Batch physics_batch(int64_t step, const StageConfig& stage, bool parallel) const;
   // Rolls the windows' simulations (TBB) and returns what L_sim needs of them.
   struct SimulatedWindows {
     std::vector<int64_t> rows;   // batch rows compared with a simulated state
@@ -230,7 +230,7 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
 
 // The physics stage's batch: `windows` runs of F consecutive train frames, each seen from
 // one view, drawn from (seed, step) alone so a resumed run draws the same.
-Batch Trainer::physics_batch(int64_t step, const StageConfig& stage) const {
+Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, bool parallel) const {
   const int F = cfg_.physics.window_frames;
   const int windows = std::max(1, stage.batch_size / F);
   PortableRandom rng(mix_seed(cfg_.seed, 0x5157, uint64_t(step)));
@@ -242,7 +242,11 @@ Batch Trainer::physics_batch(int64_t step, const StageConfig& stage) const {
     for (int j = 0; j < F; ++j) keys.emplace_back(start + j, view);
   }
   std::vector<Sample> samples(keys.size());
-  tbb::parallel_for(size_t(0), keys.size(), [&](size_t i) { samples[i] = train_->load(keys[i].first, keys[i].second); });
+  auto load = [&](size_t i) { samples[i] = train_->load(keys[i].first, keys[i].second); };
+  if (parallel)
+    tbb::parallel_for(size_t(0), keys.size(), load);
+  else
+    for (size_t i = 0; i < keys.size(); ++i) load(i);
   return make_batch(samples);
 }
 
@@ -537,10 +541,11 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     Batch batch;
     if (s.kind == StageKind::physics) {
       // Loaded one step ahead on another thread (a function of the step alone).
-      batch = next_physics.valid() && next_physics_step == step ? next_physics.get() : physics_batch(step, s);
+      batch = next_physics.valid() && next_physics_step == step ? next_physics.get() : physics_batch(step, s, true);
       if (step + 1 <= std::min(last_step, stage_start + s.steps)) {
         next_physics_step = step + 1;
-        next_physics = std::async(std::launch::async, [this, step, &s] { return physics_batch(step + 1, s); });
+        // One loading thread: the networks' kernels keep the cores.
+        next_physics = std::async(std::launch::async, [this, step, &s] { return physics_batch(step + 1, s, false); });
       }
     } else {
       if (prefetcher_stage != &s) {
