@@ -24,10 +24,12 @@ struct SynthArgs {
 void run_synth(const SynthArgs& a) {
   capture::SynthConfig cfg = capture::load_synth_config(a.config);
   if (a.seed >= 0) cfg.seed = static_cast<uint64_t>(a.seed);
-  if (a.frames > 0) cfg.motion.frames = a.frames;
+  if (a.frames > 0)
+    for (capture::SynthMotionConfig& m : cfg.motions) m.frames = a.frames;
   if (a.skin_only) cfg.simulation.enabled = false;
-  spdlog::info("synth '{}': {} frames at {} fps, seed {}, character {}", cfg.name, cfg.motion.frames,
-               cfg.motion.fps, cfg.seed, cfg.character);
+  spdlog::info("synth '{}': {} frames at {} fps{}, seed {}, character {}", cfg.name, cfg.frames(), cfg.fps(),
+               cfg.motions.size() > 1 ? fmt::format(" in {} clips", cfg.motions.size()) : std::string(), cfg.seed,
+               cfg.character);
   std::map<std::string, std::unique_ptr<ProgressBar>> bars;
   const capture::SynthSummary s =
       capture::synthesize_dataset(cfg, a.out, [&](const capture::SynthProgress& p) {
@@ -49,7 +51,9 @@ void run_synth(const SynthArgs& a) {
     spdlog::info("simulation: {:.1f} s ({:.0f} ms per simulated frame, settling included), {} Newton iterations, {} frames at the iteration cap, "
                  "{} failed; deepest penetration {:.1f} mm, worst out-of-balance force {:.3f} m g",
                  s.seconds_simulation,
-                 1e3 * s.seconds_simulation / std::max(1, cfg.simulation.settle_frames + s.frames - 1), newton, unconverged,
+                 1e3 * s.seconds_simulation /
+                     std::max(1, static_cast<int>(s.segments.size()) * (cfg.simulation.settle_frames - 1) + s.frames),
+                 newton, unconverged,
                  s.failed_frames, 1e3 * pen, oob);
   spdlog::info("rendering: {} views of {} frames = {} images in {:.1f} s ({:.0f} views/s), writing {:.1f} s",
                s.views, s.frames, s.images, s.seconds_rendering, s.views_per_second(), s.seconds_writing);
@@ -74,7 +78,8 @@ void add_synth_command(CLI::App& app) {
       ->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "Output folder (created if missing)")->required();
   cmd->add_option("--seed", args->seed, "Overrides the config's seed");
-  cmd->add_option("--frames", args->frames, "Overrides motion.frames (e.g. a quick look at a big config)")
+  cmd->add_option("--frames", args->frames,
+                  "Overrides motion.frames, or every clip's frames with motions: (e.g. a quick look at a big config)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--skin-only", args->skin_only,
                 "Skin the garment instead of simulating it (simulation.enabled: false): fast previews and "

@@ -70,6 +70,27 @@ std::vector<int> frame_list(const StrictYaml& y, const YAML::Node& node, const s
   return out;
 }
 
+// `segments`: the first frame of each clip, 0 first, strictly increasing, below `frames`.
+std::vector<int> segment_list(const StrictYaml& y, const YAML::Node& node, int frames) {
+  if (!node.IsSequence() || node.size() == 0)
+    y.fail_at(node, "segments", "expected a list of the clips' first frames, starting with 0 ([0, 300, 600])");
+  std::vector<int> out;
+  for (const YAML::Node& item : node) {
+    const int f = y.get<int>(item, "segments", "a frame id (integer)");
+    if (out.empty() && f != 0)
+      y.fail_at(item, "segments", "the first clip starts at frame 0, found " + std::to_string(f));
+    if (!out.empty() && f <= out.back())
+      y.fail_at(item, "segments",
+                "frame " + std::to_string(f) + " after " + std::to_string(out.back()) +
+                    ": expected increasing first frames (a clip has at least one frame)");
+    if (f >= frames)
+      y.fail_at(item, "segments",
+                "frame " + std::to_string(f) + " out of range (frames: " + std::to_string(frames) + ")");
+    out.push_back(f);
+  }
+  return out;
+}
+
 // ------------------------------------------------------------------------ per-sample files
 
 void require_file(const std::string& path) {
@@ -221,7 +242,7 @@ DatasetInfo read_dataset_info(const std::string& dir) {
   const YAML::Node root = y.parse(read_file_bytes(file));
   y.check_keys(root, "", {"format", "name", "seed", "fps", "metres_per_unit", "frames", "views",
                           "image_width", "image_height", "camera_per_frame", "character",
-                          "dt_scale", "splits", "failed_frames"});
+                          "dt_scale", "splits", "failed_frames", "segments"});
   DatasetInfo info;
   info.dir = dir;
 
@@ -234,6 +255,7 @@ DatasetInfo read_dataset_info(const std::string& dir) {
   info.fps = y.positive(required(y, root, "fps"), "fps");
   info.metres_per_unit = y.positive(required(y, root, "metres_per_unit"), "metres_per_unit");
   info.frames = positive_int(y, required(y, root, "frames"), "frames");
+  if (root["segments"]) info.segments = segment_list(y, root["segments"], info.frames);
 
   const YAML::Node views = required(y, root, "views");
   info.views = y.strings(views, "views");
@@ -285,6 +307,15 @@ DatasetInfo read_dataset_info(const std::string& dir) {
   }
   require_file((fs::path(dir) / "cameras.yaml").string());
   return info;
+}
+
+bool same_segment(const DatasetInfo& info, int a, int b) {
+  for (const int f : {a, b})
+    if (f < 0 || f >= info.frames)
+      fail("same_segment: frame ", f, " is not a frame of ", info.dir, " (ids 0..", info.frames - 1, ")");
+  // The clip of a frame: how many clips start at or before it.
+  auto clip = [&](int f) { return std::upper_bound(info.segments.begin(), info.segments.end(), f); };
+  return clip(a) == clip(b);
 }
 
 // ------------------------------------------------------------------------ SyntheticDataset

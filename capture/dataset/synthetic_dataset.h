@@ -53,7 +53,8 @@ namespace weft::capture {
 
 // dataset.yaml. Required keys: format (weft-synth/1), metres_per_unit, fps, frames, views,
 // image_width, image_height, character, dt_scale, splits; optional: name (default: the
-// folder's name), seed (0), camera_per_frame (false), failed_frames (none).
+// folder's name), seed (0), camera_per_frame (false), failed_frames (none), segments (one
+// clip).
 struct DatasetInfo {
   std::string dir;            // the dataset folder
   std::string format;         // "weft-synth/1"
@@ -62,6 +63,9 @@ struct DatasetInfo {
   double fps = 30.0;          // frames per second
   double metres_per_unit = 1.0;  // world / character units in metres (ddc: 0.001)
   int frames = 0;             // frame ids 0 .. frames − 1
+  // First frame of each motion clip, ascending from 0 (a dataset made from several clips):
+  // clip k is frames [segments[k], segments[k+1]), simulated on its own. Empty: one clip.
+  std::vector<int> segments;
   std::vector<std::string> views;
   int image_width = 0, image_height = 0;  // pixels
   bool camera_per_frame = false;  // cameras named <view>_<frame:04d> ("in the wild")
@@ -73,9 +77,14 @@ struct DatasetInfo {
 
 // Reads and checks DIR/dataset.yaml: unknown keys, wrong types, missing keys, a missing
 // character or cameras.yaml, split frames out of range or repeated, a frame in two splits
-// or in a split and failed_frames are weft::Errors naming the file, line, key and what
-// was expected.
+// or in a split and failed_frames, segments not starting at 0, not increasing or out of
+// range are weft::Errors naming the file, line, key and what was expected.
 DatasetInfo read_dataset_info(const std::string& dir);
+
+// True when frames a and b (in [0, info.frames), else a weft::Error) lie in the same clip:
+// a simulation window over frames a..b needs it, the garment's motion does not go on
+// across a clip boundary.
+bool same_segment(const DatasetInfo& info, int a, int b);
 
 // Paths of one frame and view's files (frame ids are written with 4 digits).
 std::string dataset_image_path(const DatasetInfo& info, int frame, const std::string& view);

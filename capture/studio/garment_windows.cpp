@@ -39,7 +39,7 @@ GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std:
   const DatasetInfo info = read_dataset_info(dataset_dir);
   const SynthConfig cfg = load_synth_config(synth_config);
   WEFT_CHECK(cfg.simulation.enabled, synth_config, ": simulation.enabled is false: the dataset's garment is skinned");
-  WEFT_CHECK(std::abs(cfg.motion.fps - info.fps) < 1e-9, synth_config, ": motion.fps ", cfg.motion.fps,
+  WEFT_CHECK(std::abs(cfg.fps() - info.fps) < 1e-9, synth_config, ": ", cfg.motion_key(0), ".fps ", cfg.fps(),
              " but the dataset ", dataset_dir, " is at ", info.fps, " fps: not the config it was made with");
   GarmentSequence s;
   s.dir = dataset_dir;
@@ -49,6 +49,7 @@ GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std:
   s.fps = info.fps;
   s.frames = info.frames;
   s.failed_frames = info.failed_frames;
+  s.segments = info.segments;
   const Motion motion = read_motion((fs::path(dataset_dir) / "gt" / "pose.motion").string(),
                                     static_cast<int>(s.character.rest_dofs.size()));
   WEFT_CHECK(motion.num_frames() == s.frames, dataset_dir, "/gt/pose.motion: ", motion.num_frames(),
@@ -70,6 +71,11 @@ physics::SimulationWindow garment_window(const GarmentSequence& s, int start, in
                                          physics::Positions x_prev2, physics::Positions x_prev) {
   WEFT_CHECK(frames >= 1 && start >= 0 && start + frames < s.frames, s.dir, ": a window of ", frames,
              " frames after frame ", start, " does not fit in ", s.frames, " frames");
+  // The ground truth's garment restarts at each clip's first frame: no window crosses one.
+  const auto next_clip = std::upper_bound(s.segments.begin(), s.segments.end(), start);
+  WEFT_CHECK(next_clip == s.segments.end() || *next_clip > start + frames, s.dir, ": a window of ", frames,
+             " frames after frame ", start, " crosses the clip starting at frame ",
+             next_clip == s.segments.end() ? 0 : *next_clip, " (dataset.yaml segments)");
   physics::SimulationWindow w;
   w.x_prev2 = std::move(x_prev2);
   w.x_prev = std::move(x_prev);

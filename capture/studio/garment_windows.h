@@ -21,6 +21,7 @@ struct GarmentSequence {
   double fps = 30;                         // the dataset's (checked against the config's)
   int frames = 0;
   std::vector<int> failed_frames;          // from dataset.yaml
+  std::vector<int> segments;               // first frame of each clip (dataset.yaml; empty: one clip)
   std::vector<physics::Positions> cloth;   // gt/cloth_<f>.ply per frame (3n, m)
   std::vector<std::vector<physics::Vec3>> pin_targets;  // per frame (m)
   double time_step() const { return 1.0 / fps; }
@@ -35,7 +36,8 @@ struct GarmentSequence {
 GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std::string& synth_config);
 
 // A window from given states x_prev2 (frame start − 1) and x_prev (frame start),
-// simulating `frames` frames after `start` with the ground-truth body and pins.
+// simulating `frames` frames after `start` with the ground-truth body and pins. Frames
+// start .. start + frames must lie in one clip (a weft::Error otherwise).
 physics::SimulationWindow garment_window(const GarmentSequence& sequence, int start, int frames,
                                          physics::Positions x_prev2, physics::Positions x_prev);
 

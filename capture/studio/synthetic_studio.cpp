@@ -2,6 +2,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Dense>
+
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -39,22 +42,58 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// mix_seed's stream for the wild camera takes of clips after the first; keypoint noise
+// uses streams (view, frame), with small view ids.
+constexpr uint64_t kWildTakeStream = 0x57494c4454414b45ull;  // "WILDTAKE"
+
 // ------------------------------------------------------------------ config
 
-void parse_motion(const StrictYaml& y, const YAML::Node& n, SynthMotionConfig& m) {
-  y.check_keys(n, "motion.", {"procedural", "bvh", "mapping", "skeletool", "fps", "start", "frames", "stride"});
+// `key` names the section in messages: "motion", or "motions[k]" in a list of clips.
+void parse_motion(const StrictYaml& y, const YAML::Node& n, const std::string& key, SynthMotionConfig& m) {
+  if (!n.IsMap()) y.fail_at(n, key, "expected a motion section (procedural, bvh or skeletool, mapping, fps, ...)");
+  const std::string k = key + ".";
+  y.check_keys(n, k, {"procedural", "bvh", "mapping", "skeletool", "fps", "start", "frames", "stride", "in_place_s"});
   int sources = 0;
-  if (n["procedural"]) m.procedural = y.path(n["procedural"], "motion.procedural"), ++sources;
-  if (n["bvh"]) m.bvh = y.path(n["bvh"], "motion.bvh"), ++sources;
-  if (n["skeletool"]) m.skeletool = y.path(n["skeletool"], "motion.skeletool"), ++sources;
-  if (sources != 1) y.fail_at(n, "motion", "expected exactly one of procedural, bvh or skeletool");
-  if (n["mapping"]) m.mapping = y.path(n["mapping"], "motion.mapping");
+  if (n["procedural"]) m.procedural = y.path(n["procedural"], k + "procedural"), ++sources;
+  if (n["bvh"]) m.bvh = y.path(n["bvh"], k + "bvh"), ++sources;
+  if (n["skeletool"]) m.skeletool = y.path(n["skeletool"], k + "skeletool"), ++sources;
+  if (sources != 1) y.fail_at(n, key, "expected exactly one of procedural, bvh or skeletool");
+  if (n["mapping"]) m.mapping = y.path(n["mapping"], k + "mapping");
   if (m.skeletool.empty() && m.mapping.empty())
-    y.fail_at(n, "motion.mapping", "a procedural or BVH motion needs a retarget mapping (configs/retarget/*.yaml)");
-  if (n["fps"]) m.fps = y.number(n["fps"], "motion.fps", 1, 1000);
-  if (n["start"]) m.start_s = y.number(n["start"], "motion.start", 0, 1e6);
-  if (n["frames"]) m.frames = static_cast<int>(y.number(n["frames"], "motion.frames", 1, 1e6));
-  if (n["stride"]) m.stride = static_cast<int>(y.number(n["stride"], "motion.stride", 1, 1000));
+    y.fail_at(n, k + "mapping", "a procedural or BVH motion needs a retarget mapping (configs/retarget/*.yaml)");
+  if (n["fps"]) m.fps = y.number(n["fps"], k + "fps", 1, 1000);
+  if (n["start"]) m.start_s = y.number(n["start"], k + "start", 0, 1e6);
+  if (n["frames"]) m.frames = static_cast<int>(y.number(n["frames"], k + "frames", 1, 1e6));
+  if (n["stride"]) m.stride = static_cast<int>(y.number(n["stride"], k + "stride", 1, 1000));
+  if (n["in_place_s"]) m.in_place_s = y.number(n["in_place_s"], k + "in_place_s", 0, 100);
+}
+
+// `motion:` (one clip) or `motions:` (a list of clips, each a motion section, one fps).
+void parse_motions(const StrictYaml& y, const YAML::Node& root, SynthConfig& c) {
+  const YAML::Node one = root["motion"], list = root["motions"];
+  if (one && list)
+    y.fail_at(list, "motions", "give either motion (one clip) or motions (a list of clips), not both");
+  if (one) {
+    c.motions.assign(1, SynthMotionConfig{});
+    parse_motion(y, one, "motion", c.motions[0]);
+    return;
+  }
+  if (!list) y.fail_at(root, "motion", "missing: the motion section (or motions: a list of them)");
+  if (!list.IsSequence() || list.size() == 0)
+    y.fail_at(list, "motions", "expected a list of motion sections (- {procedural: ..., mapping: ..., frames: ...})");
+  c.motion_list = true;
+  c.motions.assign(list.size(), SynthMotionConfig{});
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string key = "motions[" + std::to_string(i) + "]";
+    parse_motion(y, list[i], key, c.motions[i]);
+    // One dataset has one frame rate (dataset.yaml's fps, the simulator's time step).
+    if (c.motions[i].fps != c.motions[0].fps) {
+      std::ostringstream msg;
+      msg << "every clip needs the same fps: motions[0] is at " << c.motions[0].fps << ", this one at "
+          << c.motions[i].fps;
+      y.fail_at(list[i]["fps"] ? list[i]["fps"] : list[i], key + ".fps", msg.str());
+    }
+  }
 }
 
 void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationConfig& s) {
@@ -194,15 +233,21 @@ void parse_splits(const StrictYaml& y, const YAML::Node& n, SynthConfig& c) {
 
 // ------------------------------------------------------------------ motion
 
-Motion load_dataset_motion(const SynthConfig& cfg, const Character& character,
+// Clip `clip`'s motion frames from its start to its last dataset frame (stride included).
+Motion load_dataset_motion(const SynthConfig& cfg, size_t clip, const Character& character,
                            const std::function<void(const SynthProgress&)>& progress) {
-  const SynthMotionConfig& m = cfg.motion;
+  const SynthMotionConfig& m = cfg.motions[clip];
+  const std::string key = cfg.motion_key(clip);
+  // One bar per clip: each retargeting counts its own frames.
+  const std::string stage = cfg.motions.size() == 1 ? "motion"
+                                                    : "motion " + std::to_string(clip + 1) + "/" +
+                                                          std::to_string(cfg.motions.size());
   const int needed = (m.frames - 1) * m.stride + 1;  // motion frames at m.fps
   if (!m.skeletool.empty()) {
     Motion all = read_motion(m.skeletool, character.skeleton.num_dofs());
     const int first = static_cast<int>(std::lround(m.start_s * m.fps));
     WEFT_CHECK(first + needed <= all.num_frames(), m.skeletool, ": ", all.num_frames(), " frames, but ", cfg.file,
-               " asks for ", needed, " from frame ", first, " (motion.start ", m.start_s, " s at ", m.fps, " fps)");
+               " asks for ", needed, " from frame ", first, " (", key, ".start ", m.start_s, " s at ", m.fps, " fps)");
     Motion out;
     out.dofs = all.dofs.middleRows(first, needed);
     for (int i = 0; i < needed; ++i) out.frame_ids.push_back(i);
@@ -216,7 +261,7 @@ Motion load_dataset_motion(const SynthConfig& cfg, const Character& character,
   }
   const double duration = source.frame_time_s * (source.num_frames() - 1);
   const double end_s = m.start_s + (needed - 1) / m.fps;
-  WEFT_CHECK(end_s <= duration + 1e-9, cfg.file, ": motion.frames ", m.frames, " (stride ", m.stride, ") from ",
+  WEFT_CHECK(end_s <= duration + 1e-9, cfg.file, ": ", key, ".frames ", m.frames, " (stride ", m.stride, ") from ",
              m.start_s, " s need ", end_s, " s of motion, but ", source.source.empty() ? m.procedural : source.source,
              " lasts ", duration, " s");
   RetargetOptions o;
@@ -224,15 +269,60 @@ Motion load_dataset_motion(const SynthConfig& cfg, const Character& character,
   o.start_s = m.start_s;
   o.end_s = end_s + 0.5 / m.fps;
   o.progress = [&](int done, int total) {
-    if (progress) progress({"motion", done, total});
+    if (progress) progress({stage, done, total});
   };
   RetargetResult r = retarget_motion(source, load_retarget_mapping(m.mapping), character, o);
-  WEFT_CHECK(r.motion.num_frames() >= needed, cfg.file, ": retargeting gave ", r.motion.num_frames(),
+  WEFT_CHECK(r.motion.num_frames() >= needed, cfg.file, ": ", key, ": retargeting gave ", r.motion.num_frames(),
              " frames, ", needed, " needed");
   Motion out;
   out.dofs = r.motion.dofs.topRows(needed);
   for (int i = 0; i < needed; ++i) out.frame_ids.push_back(i);
   return out;
+}
+
+// Takes the root's horizontal path, smoothed over sigma_frames, away from dofs (frames × D):
+// the root translations are the dofs driving only prismatic joints with nothing but
+// prismatic joints above them, so their axes are world axes (Y up) and a shift of the
+// whole body is a linear map of them.
+void take_away_horizontal_path(const Skeleton& skeleton, Eigen::MatrixXd& dofs, double sigma_frames,
+                               const std::string& where) {
+  std::vector<bool> translation_only(skeleton.num_joints());
+  for (int j = 0; j < skeleton.num_joints(); ++j) {
+    const Joint& joint = skeleton.joints[j];
+    translation_only[j] =
+        joint.type == JointType::prismatic && (joint.parent < 0 || translation_only[joint.parent]);
+  }
+  std::vector<int> root;
+  std::vector<Eigen::Vector3d> columns;  // world displacement per unit of each root dof
+  for (int d = 0; d < skeleton.num_dofs(); ++d) {
+    const Dof& dof = skeleton.dofs[d];
+    bool only = !dof.joints.empty();
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const DofInfluence& inf : dof.joints) {
+      only = only && translation_only[inf.joint];
+      c += inf.weight * skeleton.joints[inf.joint].axis;
+    }
+    if (only) root.push_back(d), columns.push_back(c);
+  }
+  Eigen::MatrixXd A(3, root.size());
+  for (size_t i = 0; i < root.size(); ++i) A.col(i) = columns[i];
+  Eigen::MatrixXd horizontal(2, root.size());
+  horizontal << A.row(0), A.row(2);
+  WEFT_CHECK(!root.empty() && horizontal.fullPivLu().rank() == 2, where,
+             ": the character's skeleton has no root translation dofs that move it over the ground (x and z)");
+  const Eigen::MatrixXd pinv = A.completeOrthogonalDecomposition().pseudoInverse();
+  std::vector<Eigen::Vector3d> track(dofs.rows());
+  for (int f = 0; f < dofs.rows(); ++f) {
+    Eigen::VectorXd q(root.size());
+    for (size_t i = 0; i < root.size(); ++i) q[i] = dofs(f, root[i]);
+    track[f] = A * q;
+    track[f].y() = 0;  // heights (a jump, a squat) stay
+  }
+  const std::vector<Eigen::Vector3d> path = smooth_track(track, sigma_frames);
+  for (int f = 0; f < dofs.rows(); ++f) {
+    const Eigen::VectorXd dq = pinv * -path[f];
+    for (size_t i = 0; i < root.size(); ++i) dofs(f, root[i]) += dq[i];
+  }
 }
 
 // ------------------------------------------------------------------ helpers
@@ -327,22 +417,31 @@ std::string dataset_frame_name(int frame) {
   return buf;
 }
 
+int SynthConfig::frames() const {
+  int n = 0;
+  for (const SynthMotionConfig& m : motions) n += m.frames;
+  return n;
+}
+
+std::string SynthConfig::motion_key(size_t clip) const {
+  return motion_list ? "motions[" + std::to_string(clip) + "]" : "motion";
+}
+
 SynthConfig parse_synth_config(const std::string& text, const std::string& name) {
   StrictYaml y;
   y.file = name;
   y.dir = fs::path(name).parent_path();
   const YAML::Node root = y.parse(text);
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
-  y.check_keys(root, "", {"name", "seed", "character", "motion", "simulation", "cameras", "render", "keypoints",
-                          "splits"});
+  y.check_keys(root, "", {"name", "seed", "character", "motion", "motions", "simulation", "cameras", "render",
+                          "keypoints", "splits"});
   SynthConfig c;
   c.file = name;
   c.name = root["name"] ? y.get<std::string>(root["name"], "name", "a string") : fs::path(name).stem().string();
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
   if (!root["character"]) y.fail_at(root, "character", "missing: a default-character config (configs/characters/*.yaml)");
   c.character = y.path(root["character"], "character");
-  if (!root["motion"]) y.fail_at(root, "motion", "missing: the motion section");
-  parse_motion(y, root["motion"], c.motion);
+  parse_motions(y, root, c);
   if (root["simulation"]) parse_simulation(y, root["simulation"], c.simulation);
   if (root["cameras"]) parse_camera_setup(y, root["cameras"], c.cameras);
   if (root["render"]) parse_render(y, root["render"], c.render);
@@ -377,27 +476,37 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
   const double mpu = ch.metres_per_unit;
   summary.seconds_character = seconds_since(t0);
 
-  // Motion.
+  // Motion: the clips' frames one after another; clip k starts at dataset frame segments[k].
   t0 = Clock::now();
-  const Motion motion = load_dataset_motion(cfg, ch, progress);
-  const int frames = cfg.motion.frames;
+  const int frames = cfg.frames();
+  std::vector<int> segments;
   std::vector<PosedCharacter> posed;
   posed.reserve(frames);
-  for (int f = 0; f < frames; ++f) {
-    const Eigen::VectorXd dofs = motion.dofs.row(f * cfg.motion.stride).transpose();
-    WEFT_CHECK(dofs.allFinite(), cfg.file, ": the motion has a non-finite dof at dataset frame ", f);
-    posed.push_back(pose_character(ch, dofs));
-  }
-  {
-    Motion gt;
-    gt.dofs.resize(frames, motion.dofs.cols());
-    for (int f = 0; f < frames; ++f) {
-      gt.dofs.row(f) = motion.dofs.row(f * cfg.motion.stride);
+  Motion gt;
+  for (size_t k = 0; k < cfg.motions.size(); ++k) {
+    const SynthMotionConfig& m = cfg.motions[k];
+    const Motion motion = load_dataset_motion(cfg, k, ch, progress);
+    if (k == 0) gt.dofs.resize(frames, motion.dofs.cols());
+    const int first = static_cast<int>(posed.size());
+    segments.push_back(first);
+    Eigen::MatrixXd clip(m.frames, motion.dofs.cols());
+    for (int i = 0; i < m.frames; ++i) clip.row(i) = motion.dofs.row(i * m.stride);
+    if (m.in_place_s >= 0)
+      take_away_horizontal_path(ch.skeleton, clip, m.in_place_s * m.fps,
+                                cfg.file + ": " + cfg.motion_key(k) + ".in_place_s");
+    gt.dofs.middleRows(first, m.frames) = clip;
+    for (int i = 0; i < m.frames; ++i) {
+      const int f = first + i;
       gt.frame_ids.push_back(f);
+      const Eigen::VectorXd dofs = gt.dofs.row(f).transpose();
+      WEFT_CHECK(dofs.allFinite(), cfg.file, ": ", cfg.motion_key(k), " has a non-finite dof at dataset frame ", f);
+      posed.push_back(pose_character(ch, dofs));
     }
-    make_dir(out / "gt");
-    write_motion((out / "gt" / "pose.motion").string(), gt);
   }
+  const int clips = static_cast<int>(segments.size());
+  auto segment_end = [&](int k) { return k + 1 < clips ? segments[k + 1] : frames; };
+  make_dir(out / "gt");
+  write_motion((out / "gt" / "pose.motion").string(), gt);
   summary.seconds_motion = seconds_since(t0);
 
   // Ground-truth cloth: simulated over the motion (or skinned).
@@ -416,64 +525,71 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     auto body_metres = [&](int f) -> Eigen::MatrixX3d { return posed[f].body * mpu; };
     const std::vector<int> anchors = garment_pin_vertices(ch);
     auto pin_targets = [&](int f) { return garment_pin_targets(ch, posed[f].cloth); };
-    const std::unique_ptr<physics::ClothSimulator> simulator =
-        make_garment_simulator(ch, s, cfg.motion.fps, body_metres(0), pin_targets(0));
-    physics::ClothSimulator& sim = *simulator;
-    const double h = sim.settings().time_step;
-    physics::Positions x2 = to_positions(posed[0].cloth, mpu), x1 = x2;
-    Eigen::MatrixX3d body_prev = body_metres(0), body_now;
-    const int total = s.settle_frames + frames - 1;
+    const int total = clips * s.settle_frames + frames - clips;
     int done = 0;
-    // Settling: the garment falls into its rest drape on the first pose.
-    for (int k = 0; k < s.settle_frames; ++k) {
-      physics::StepResult r = sim.step(x2, x1);
-      x2 = std::move(x1);
-      x1 = std::move(r.x);
-      if (progress) progress({"simulation", ++done, total});
-    }
-    cloth[0] = to_vertices(x1, mpu);
-    summary.reports[0].frame = 0;
-    summary.reports[0].status = s.settle_frames > 0 ? "settled" : "skinned";
-    {
-      physics::FrameMetrics m;
-      physics::measure_penetration(sim, x1, m);
-      summary.reports[0].penetration_max = m.penetration_max;
-      summary.reports[0].failed = m.penetration_max > s.max_penetration;
-      metric_frames.push_back({{"frame", 0}, {"status", summary.reports[0].status},
-                               {"penetration_max", m.penetration_max},
-                               {"min_signed_distance", finite_or_null(m.min_signed_distance)}});
-    }
-    for (int f = 1; f < frames; ++f) {
-      body_now = body_metres(f);
-      sim.set_pins(anchors, pin_targets(f));
-      physics::StepResult r = sim.step(x2, x1, &body_prev, &body_now);
-      const physics::FrameMetrics m = physics::frame_metrics(sim, x2, x1, r.x, h);
-      SynthFrameReport& rep = summary.reports[f];
-      rep.frame = f;
-      rep.status = physics::to_string(r.status);
-      rep.newton_iterations = r.newton_iterations;
-      rep.penetration_max = m.penetration_max;
-      rep.oob_force_max_rel = m.oob_force_max_rel;
-      // Failed: ended more than 10× Newton's tolerance from equilibrium (a step stopped by the
-      // iteration cap or the line search close to it is kept), non-finite, or too deep.
-      const bool near_converged = r.status == physics::StepStatus::converged ||
-                                  (r.status != physics::StepStatus::non_finite && r.last.residual <= 10 * s.tolerance);
-      rep.failed = !near_converged || m.penetration_max > s.max_penetration || !r.x.allFinite();
-      physics::FrameRecord rec;
-      rec.frame = f;
-      rec.status = r.status;
-      rec.newton_iterations = r.newton_iterations;
-      rec.gradient_norm = r.gradient_norm;
-      rec.energy = r.energy;
-      rec.metrics = m;
-      nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
-      entry["failed"] = rep.failed;
-      metric_frames.push_back(entry);
-      cloth[f] = to_vertices(r.x, mpu);
-      x2 = std::move(x1);
-      x1 = std::move(r.x);
-      body_prev = body_now;
-      if (progress) progress({"simulation", ++done, total});
+    // Each clip is a simulation of its own, started like the first: the next clip's body
+    // starts somewhere else, and one step across the boundary would tear the garment.
+    for (int k = 0; k < clips; ++k) {
+      const int first = segments[k], end = segment_end(k);
+      const std::unique_ptr<physics::ClothSimulator> simulator =
+          make_garment_simulator(ch, s, cfg.fps(), body_metres(first), pin_targets(first));
+      physics::ClothSimulator& sim = *simulator;
+      const double h = sim.settings().time_step;
+      physics::Positions x2 = to_positions(posed[first].cloth, mpu), x1 = x2;
+      Eigen::MatrixX3d body_prev = body_metres(first), body_now;
+      // Settling: the garment falls into its rest drape on the clip's first pose.
+      for (int i = 0; i < s.settle_frames; ++i) {
+        physics::StepResult r = sim.step(x2, x1);
+        x2 = std::move(x1);
+        x1 = std::move(r.x);
+        if (progress) progress({"simulation", ++done, total});
+      }
+      cloth[first] = to_vertices(x1, mpu);
+      SynthFrameReport& settled = summary.reports[first];
+      settled.frame = first;
+      settled.status = s.settle_frames > 0 ? "settled" : "skinned";
+      {
+        physics::FrameMetrics m;
+        physics::measure_penetration(sim, x1, m);
+        settled.penetration_max = m.penetration_max;
+        settled.failed = m.penetration_max > s.max_penetration;
+        metric_frames.push_back({{"frame", first}, {"status", settled.status},
+                                 {"penetration_max", m.penetration_max},
+                                 {"min_signed_distance", finite_or_null(m.min_signed_distance)}});
+      }
+      for (int f = first + 1; f < end; ++f) {
+        body_now = body_metres(f);
+        sim.set_pins(anchors, pin_targets(f));
+        physics::StepResult r = sim.step(x2, x1, &body_prev, &body_now);
+        const physics::FrameMetrics m = physics::frame_metrics(sim, x2, x1, r.x, h);
+        SynthFrameReport& rep = summary.reports[f];
+        rep.frame = f;
+        rep.status = physics::to_string(r.status);
+        rep.newton_iterations = r.newton_iterations;
+        rep.penetration_max = m.penetration_max;
+        rep.oob_force_max_rel = m.oob_force_max_rel;
+        // Failed: ended more than 10× Newton's tolerance from equilibrium (a step stopped by the
+        // iteration cap or the line search close to it is kept), non-finite, or too deep.
+        const bool near_converged =
+            r.status == physics::StepStatus::converged ||
+            (r.status != physics::StepStatus::non_finite && r.last.residual <= 10 * s.tolerance);
+        rep.failed = !near_converged || m.penetration_max > s.max_penetration || !r.x.allFinite();
+        physics::FrameRecord rec;
+        rec.frame = f;
+        rec.status = r.status;
+        rec.newton_iterations = r.newton_iterations;
+        rec.gradient_norm = r.gradient_norm;
+        rec.energy = r.energy;
+        rec.metrics = m;
+        nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
+        entry["failed"] = rep.failed;
+        metric_frames.push_back(entry);
+        cloth[f] = to_vertices(r.x, mpu);
+        x2 = std::move(x1);
+        x1 = std::move(r.x);
+        body_prev = body_now;
+        if (progress) progress({"simulation", ++done, total});
+      }
     }
   }
   summary.seconds_simulation = seconds_since(t0);
@@ -495,10 +611,19 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
   } else {
     WildCameraConfig wild = cfg.cameras.wild;
     wild.metres_per_unit = mpu;
-    std::vector<Eigen::Vector3d> subject_track(frames);  // the body's vertex centroid, character units
-    for (int f = 0; f < frames; ++f) subject_track[f] = posed[f].body.colwise().mean().transpose();
-    std::vector<Camera> path = wild_camera_path(wild, frames, cfg.motion.fps, cfg.seed, subject_track);
-    exposure = wild_exposure(wild, frames, cfg.motion.fps, cfg.seed);
+    // Each clip is a take of its own: the orbit starts again and follows that clip's
+    // subject (smoothing across a clip boundary would drag the camera after a jump).
+    std::vector<Camera> path;
+    for (int k = 0; k < clips; ++k) {
+      const int first = segments[k], n = segment_end(k) - first;
+      std::vector<Eigen::Vector3d> subject_track(n);  // the body's vertex centroid, character units
+      for (int i = 0; i < n; ++i) subject_track[i] = posed[first + i].body.colwise().mean().transpose();
+      const uint64_t seed = k == 0 ? cfg.seed : mix_seed(cfg.seed, kWildTakeStream, static_cast<uint64_t>(k));
+      const std::vector<Camera> take = wild_camera_path(wild, n, cfg.fps(), seed, subject_track);
+      const std::vector<double> light = wild_exposure(wild, n, cfg.fps(), seed);
+      path.insert(path.end(), take.begin(), take.end());
+      std::copy(light.begin(), light.end(), exposure.begin() + first);
+    }
     views.push_back("wild");
     for (int f = 0; f < frames; ++f) path[f].name = "wild_" + dataset_frame_name(f);
     cameras.push_back(path);
@@ -587,18 +712,22 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     write_ply((out / "gt" / ("cloth_" + dataset_frame_name(f) + ".ply")).string(), with_vertices(cloth_mesh, cloth[f]));
   }
 
-  // Splits: contiguous blocks in time (train, then val, then test), failed frames left out.
-  const int n_test = static_cast<int>(std::floor(cfg.test_fraction * frames));
-  const int n_val = static_cast<int>(std::floor(cfg.val_fraction * frames));
+  // Splits: contiguous blocks in time at the end of each clip (train, then val, then test),
+  // so every split sees every motion; failed frames left out.
   std::vector<int> failed;
-  for (int f = 0; f < frames; ++f) {
-    if (summary.reports[f].failed) {
-      failed.push_back(f);
-      continue;
+  for (int k = 0; k < clips; ++k) {
+    const int first = segments[k], end = segment_end(k), n = end - first;
+    const int n_test = static_cast<int>(std::floor(cfg.test_fraction * n));
+    const int n_val = static_cast<int>(std::floor(cfg.val_fraction * n));
+    for (int f = first; f < end; ++f) {
+      if (summary.reports[f].failed) {
+        failed.push_back(f);
+        continue;
+      }
+      if (f >= end - n_test) summary.test.push_back(f);
+      else if (f >= end - n_test - n_val) summary.val.push_back(f);
+      else summary.train.push_back(f);
     }
-    if (f >= frames - n_test) summary.test.push_back(f);
-    else if (f >= frames - n_test - n_val) summary.val.push_back(f);
-    else summary.train.push_back(f);
   }
 
   // metrics.json: deterministic (no wall times; those go to timing.json).
@@ -609,13 +738,15 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
                             {"cloth_vertices", cloth_mesh.num_vertices()},
                             {"frames", frames},
                             {"failed_frames", failed},
-                            {"time_step", 1.0 / cfg.motion.fps},
+                            {"time_step", 1.0 / cfg.fps()},
                             {"substeps", cfg.simulation.substeps},
                             {"settle_frames", cfg.simulation.settle_frames}}}};
+    if (clips > 1) doc["summary"]["segments"] = segments;  // one clip: the file as before
     write_text_atomically((out / "metrics.json").string(), doc.dump(2) + "\n");
   }
 
   summary.frames = frames;
+  summary.segments = segments;
   summary.views = num_views;
   summary.images = frames * num_views;
   summary.cloth_vertices = cloth_mesh.num_vertices();
@@ -628,10 +759,11 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
       << "format: weft-synth/1\n"
       << "name: " << cfg.name << "\n"
       << "seed: " << cfg.seed << "\n"
-      << "fps: " << cfg.motion.fps << "\n"
+      << "fps: " << cfg.fps() << "\n"
       << "metres_per_unit: " << mpu << "\n"
-      << "frames: " << frames << "\n"
-      << "views: [";
+      << "frames: " << frames << "\n";
+    if (clips > 1) y << "segments: " << yaml_int_list(segments) << "\n";  // one clip: no key, the file as before
+    y << "views: [";
     for (int v = 0; v < num_views; ++v) y << (v ? ", " : "") << views[v];
     y << "]\n"
       << "image_width: " << cameras[0][0].width << "\n"

@@ -6,7 +6,9 @@
 // renders every frame into a studio rig of calibrated cameras (or one moving "in the wild"
 // camera), and writes images, masks, part masks, distance transforms, noisy BODY_25
 // keypoints, ground-truth meshes and the simulator's metrics. Deterministic for a seed:
-// every file but timing.json is identical between runs.
+// every file but timing.json is identical between runs. Several motion clips may make one
+// dataset: their frames are concatenated, and each clip is a simulation segment of its own
+// (the garment settles again on its first pose), so no simulation crosses a clip boundary.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -30,6 +32,11 @@ struct SynthMotionConfig {
   double start_s = 0;      // where in the motion the dataset starts (s)
   int frames = 10;         // frames written
   int stride = 1;          // motion frames per dataset frame
+  // ≥ 0: keeps a travelling subject in the studio by taking away the root's horizontal path
+  // smoothed over σ = in_place_s seconds of dataset frames (a Gaussian-weighted local line
+  // fit: a steady walk becomes a walk on a treadmill; 0 takes away all horizontal root
+  // motion). < 0 (the default): the motion's own path.
+  double in_place_s = -1;
 };
 
 struct SynthSimulationConfig {
@@ -71,12 +78,20 @@ struct SynthConfig {
   std::string name;
   uint64_t seed = 1;
   std::string character;   // a default-character config (configs/characters/*.yaml)
-  SynthMotionConfig motion;
+  // The clips in dataset order: one from `motion:`, or the `motions:` list. Clip k covers
+  // the dataset frames after those of clips 0..k−1; all clips share one fps.
+  std::vector<SynthMotionConfig> motions{SynthMotionConfig{}};
+  bool motion_list = false;  // the clips came from `motions:` (messages name motions[k])
   SynthSimulationConfig simulation;
   SynthCameraConfig cameras;
   SynthRenderConfig render;
   KeypointNoiseConfig keypoints;
-  double val_fraction = 0.1, test_fraction = 0.1;  // contiguous blocks at the end of the sequence
+  double val_fraction = 0.1, test_fraction = 0.1;  // contiguous blocks at the end of each clip
+
+  double fps() const { return motions.front().fps; }  // the dataset's frame rate
+  int frames() const;                                 // all clips' frames
+  // The clip's config key in messages: "motion", or "motions[k]".
+  std::string motion_key(size_t clip) const;
 };
 
 // Strict YAML: unknown keys, wrong types, missing files and out-of-range values are
@@ -95,6 +110,7 @@ struct SynthFrameReport {
 
 struct SynthSummary {
   int frames = 0, views = 0;
+  std::vector<int> segments;        // first frame of each clip (one clip: {0})
   int failed_frames = 0;
   int images = 0;                   // rendered views
   int cloth_vertices = 0, body_vertices = 0;
@@ -108,12 +124,14 @@ struct SynthSummary {
 };
 
 struct SynthProgress {
-  std::string stage;  // "motion", "simulation", "rendering"
+  std::string stage;  // "motion" ("motion k/n" per clip with several), "simulation", "rendering"
   int done = 0, total = 0;
 };
 
 // Writes the dataset into out_dir (created if missing; existing dataset files are
-// replaced). `progress` is called as stages advance.
+// replaced). `progress` is called as stages advance. With several clips, dataset.yaml
+// lists their first frames (`segments`) and every split takes its fraction from the end of
+// each clip; one clip gives the files a single-clip config always gave.
 SynthSummary synthesize_dataset(const SynthConfig& config, const std::string& out_dir,
                                 const std::function<void(const SynthProgress&)>& progress = {});
 

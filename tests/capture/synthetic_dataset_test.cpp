@@ -166,6 +166,49 @@ TEST(SyntheticDatasetInfo, ReadsEveryKey) {
   EXPECT_EQ(info.splits.at("val"), (std::vector<int>{4}));
   EXPECT_EQ(info.splits.at("test"), (std::vector<int>{5}));
   EXPECT_TRUE(info.failed_frames.empty());
+  EXPECT_TRUE(info.segments.empty());  // one clip
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) EXPECT_TRUE(same_segment(info, a, b));
+}
+
+TEST(SyntheticDatasetInfo, SegmentsSplitTheFramesIntoClips) {
+  ScratchDir scratch("dataset");
+  const FakeDataset d = write_dataset(scratch);
+  std::ofstream(fs::path(d.dir) / "dataset.yaml") << dataset_yaml("segments: [0, 2, 5]\n");
+  const DatasetInfo info = read_dataset_info(d.dir);
+  EXPECT_EQ(info.segments, (std::vector<int>{0, 2, 5}));
+  EXPECT_TRUE(same_segment(info, 0, 1));
+  EXPECT_FALSE(same_segment(info, 1, 2));
+  EXPECT_TRUE(same_segment(info, 2, 4));
+  EXPECT_TRUE(same_segment(info, 4, 2));
+  EXPECT_FALSE(same_segment(info, 0, 5));
+  EXPECT_FALSE(same_segment(info, 4, 5));
+  EXPECT_TRUE(same_segment(info, 5, 5));  // the last clip: one frame
+  expect_error([&] { same_segment(info, 0, 6); }, {"same_segment", "frame 6", "0..5"});
+  expect_error([&] { same_segment(info, -1, 0); }, {"same_segment", "frame -1"});
+}
+
+TEST(SyntheticDatasetInfo, BadSegmentsNameFileLineAndKey) {
+  ScratchDir scratch("dataset");
+  const FakeDataset d = write_dataset(scratch);
+  auto rewrite = [&](const std::string& segments) {
+    std::ofstream(fs::path(d.dir) / "dataset.yaml") << dataset_yaml("segments: " + segments + "\n");
+  };
+  // dataset_yaml puts the extra keys on line 18.
+  rewrite("[2, 4]");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "starts at frame 0, found 2"});
+  rewrite("[0, 4, 3]");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "frame 3 after 4", "increasing"});
+  rewrite("[0, 2, 2]");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "frame 2 after 2"});
+  rewrite("[0, 6]");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "frame 6 out of range (frames: 6)"});
+  rewrite("[0, two]");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "expected a frame id"});
+  rewrite("[]");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "expected a list"});
+  rewrite("0");
+  expect_error([&] { read_dataset_info(d.dir); }, {"dataset.yaml:18: segments", "expected a list"});
 }
 
 TEST(SyntheticDatasetInfo, ErrorsNameFileKeyAndExpectation) {

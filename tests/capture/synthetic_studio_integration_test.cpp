@@ -21,6 +21,8 @@
 #include "capture/io/mesh_io.h"
 #include "capture/io/openpose.h"
 #include "capture/character/skeletool_io.h"
+#include "capture/studio/garment_simulator.h"
+#include "capture/studio/garment_windows.h"
 #include "capture/studio/studio_rig.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/studio/synthetic_studio.h"
@@ -290,4 +292,182 @@ TEST(SyntheticStudio, TheReaderOpensEverySplitAndCropsAgreeWithTheGroundTruth) {
     }
   }
   EXPECT_GT(checked, 50);
+}
+
+// ---------------------------------------------------------------------- several clips
+
+namespace {
+
+std::string clip_text(const char* motion, double start_s, const std::string& extra = "") {
+  std::ostringstream s;
+  s << "  - procedural: " << repo_file(std::string("configs/motions/") + motion + ".yaml") << "\n"
+    << "    mapping: " << repo_file("configs/retarget/humanoid_to_makehuman.yaml") << "\n"
+    << "    start: " << start_s << "\n    frames: 4\n" << extra;
+  return s.str();
+}
+
+// Clips in a `motions:` list; coarse skirt, 2 views at 64².
+std::string clips_config(const std::string& clips, const std::string& simulation = "{settle_frames: 4}") {
+  return "name: clips_test\nseed: 5\ncharacter: " + repo_file("configs/characters/makehuman_skirt_coarse.yaml") +
+         "\nmotions:\n" + clips + "simulation: " + simulation + "\n" +
+         "cameras: {rig: studio, views: 2, width: 64, height: 64}\nsplits: {val: 0.25, test: 0.25}\n";
+}
+
+// The mean distance between corresponding vertices (character units).
+double mean_distance(const Vertices& a, const Vertices& b) {
+  double d = 0;
+  for (int i = 0; i < a.rows(); ++i) d += (a.row(i) - b.row(i)).norm();
+  return d / std::max<Eigen::Index>(1, a.rows());
+}
+
+TriangleMesh gt_mesh(const fs::path& dir, const char* kind, int frame) {
+  return read_ply((dir / "gt" / (std::string(kind) + "_" + dataset_frame_name(frame) + ".ply")).string());
+}
+
+}  // namespace
+
+// Stepping on the spot, then rising from a squat (the hips lower): one dataset
+// with continuous frame ids whose second clip is simulated afresh from its own first pose,
+// exactly as if it had been made alone.
+TEST(SyntheticStudio, SeveralClipsMakeOneDatasetWithASimulationPerClip) {
+  SKIP_WITHOUT_HUMAN();
+  weft::capture::testing::ScratchDir scratch("clips");
+  const std::string walk = clip_text("walk_in_place", 1.5), squat = clip_text("squat_jump", 2.2);
+  const fs::path both = scratch.file("both"), alone_a = scratch.file("walk"), alone_b = scratch.file("squat");
+  const SynthSummary s =
+      synthesize_dataset(parse_synth_config(clips_config(walk + squat), "clips.yaml"), both.string());
+  synthesize_dataset(parse_synth_config(clips_config(walk), "walk.yaml"), alone_a.string());
+  synthesize_dataset(parse_synth_config(clips_config(squat), "squat.yaml"), alone_b.string());
+
+  // Frame ids run on over the clip boundary; dataset.yaml names the clips' first frames.
+  EXPECT_EQ(s.frames, 8);
+  EXPECT_EQ(s.segments, (std::vector<int>{0, 4}));
+  for (int f = 0; f < 8; ++f) EXPECT_TRUE(fs::exists(frame_path(both, "images", "cam01", f, ".png"))) << f;
+  EXPECT_FALSE(fs::exists(frame_path(both, "images", "cam01", 8, ".png")));
+  const DatasetInfo info = read_dataset_info(both.string());
+  EXPECT_EQ(info.frames, 8);
+  EXPECT_EQ(info.segments, (std::vector<int>{0, 4}));
+  EXPECT_TRUE(same_segment(info, 0, 3));
+  EXPECT_FALSE(same_segment(info, 3, 4));
+  EXPECT_NE(slurp(both / "dataset.yaml").find("\nsegments: [0, 4]\n"), std::string::npos);
+  EXPECT_EQ(slurp(alone_a / "dataset.yaml").find("segments"), std::string::npos) << "one clip: the file as before";
+  const Character ch = load_character(info.character);
+  const Motion motion = read_motion((both / "gt" / "pose.motion").string(), ch.skeleton.num_dofs());
+  ASSERT_EQ(motion.num_frames(), 8);
+  for (int f = 0; f < 8; ++f) EXPECT_EQ(motion.frame_ids[f], f);
+
+  // Splits: a quarter of each clip from its end for test, the quarter before for val.
+  for (const auto& r : s.reports) ASSERT_FALSE(r.failed) << "frame " << r.frame << ": " << r.status;
+  EXPECT_EQ(s.train, (std::vector<int>{0, 1, 4, 5}));
+  EXPECT_EQ(s.val, (std::vector<int>{2, 6}));
+  EXPECT_EQ(s.test, (std::vector<int>{3, 7}));
+  EXPECT_EQ(info.splits.at("val"), s.val);
+
+  // Each clip's first frame is a settled frame; metrics.json lists the clips.
+  const nlohmann::json metrics = nlohmann::json::parse(slurp(both / "metrics.json"));
+  ASSERT_EQ(metrics["frames"].size(), 8u);
+  for (int f : {0, 4}) {
+    EXPECT_EQ(metrics["frames"][f]["frame"], f);
+    EXPECT_EQ(metrics["frames"][f]["status"], "settled");
+  }
+  EXPECT_EQ(metrics["frames"][5]["status"], "converged");
+  EXPECT_EQ(metrics["summary"]["segments"], nlohmann::json({0, 4}));
+
+  // The garment restarts on the squat: its first frame is the skinned garment settled for
+  // 4 frames on that pose, not one more step of the walk's garment.
+  const SynthConfig cfg = parse_synth_config(clips_config(walk + squat), "clips.yaml");
+  const double mpu = ch.metres_per_unit;
+  auto body_metres = [&](int f) { return Eigen::MatrixX3d(gt_mesh(both, "body", f).V * mpu); };
+  const PosedCharacter squat_pose = pose_character(ch, motion.dofs.row(4).transpose());
+  const std::vector<weft::physics::Vec3> pins = garment_pin_targets(ch, squat_pose.cloth);
+  auto sim = make_garment_simulator(ch, cfg.simulation, cfg.fps(), body_metres(4), pins);
+  weft::physics::Positions x2 = to_positions(squat_pose.cloth, mpu), x1 = x2;
+  for (int i = 0; i < cfg.simulation.settle_frames; ++i) {
+    weft::physics::StepResult r = sim->step(x2, x1);
+    x2 = std::move(x1);
+    x1 = std::move(r.x);
+  }
+  const Vertices settled = to_vertices(x1, mpu);
+  const Eigen::MatrixX3d body3 = body_metres(3), body4 = body_metres(4);
+  auto going_on = make_garment_simulator(ch, cfg.simulation, cfg.fps(), body3, pins);
+  going_on->set_pins(garment_pin_vertices(ch), pins);
+  const weft::physics::StepResult next = going_on->step(to_positions(gt_mesh(both, "cloth", 2).V, mpu),
+                                                        to_positions(gt_mesh(both, "cloth", 3).V, mpu), &body3, &body4);
+  const Vertices cloth4 = gt_mesh(both, "cloth", 4).V;
+  const double from_settled = mean_distance(cloth4, settled), from_walk = mean_distance(cloth4, to_vertices(next.x, mpu));
+  std::printf("clip 2's first frame: %.3f mm from the skinned garment settled on its pose, %.1f mm from one more "
+              "step of the walk's garment (mean)\n", 1e3 * from_settled, 1e3 * from_walk);
+  EXPECT_LT(from_settled, 1e-4);
+  EXPECT_GT(from_walk, 0.01);
+  // Simulation windows over the ground truth stay inside a clip.
+  const GarmentSequence sequence =
+      load_garment_sequence(both.string(), scratch.write("clips.yaml", clips_config(walk + squat)));
+  EXPECT_EQ(sequence.segments, (std::vector<int>{0, 4}));
+  EXPECT_NO_THROW(garment_window(sequence, 4, 3, sequence.cloth[3], sequence.cloth[4]));
+  weft::capture::testing::expect_error(
+      [&] { garment_window(sequence, 2, 2, sequence.cloth[1], sequence.cloth[2]); },
+      {"window of 2 frames after frame 2", "crosses the clip starting at frame 4"});
+  // ... and each clip's ground truth is what that clip makes alone, to the byte.
+  for (int f = 0; f < 4; ++f)
+    for (const char* kind : {"cloth", "body"}) {
+      const std::string name = std::string(kind) + "_" + dataset_frame_name(f) + ".ply";
+      EXPECT_EQ(slurp(both / "gt" / name), slurp(alone_a / "gt" / name)) << name;
+      EXPECT_EQ(slurp(both / "gt" / (std::string(kind) + "_" + dataset_frame_name(f + 4) + ".ply")),
+                slurp(alone_b / "gt" / name))
+          << name << " of the squat";
+    }
+}
+
+// in_place_s: the walk after the turn travels 0.8 m along x in one second; taking away
+// its path smoothed over 0.5 s walks it on the spot, and changes nothing else.
+TEST(SyntheticStudio, InPlaceTakesAwayTheRootsHorizontalPath) {
+  SKIP_WITHOUT_HUMAN();
+  weft::capture::testing::ScratchDir scratch("in_place");
+  // The garment skinned, not simulated: the motion is what matters here.
+  std::unique_ptr<Character> ch;
+  auto make = [&](const std::string& name, const std::string& extra) {
+    const std::string clip = "  - procedural: " + repo_file("configs/motions/walk_in_place.yaml") +
+                             "\n    mapping: " + repo_file("configs/retarget/humanoid_to_makehuman.yaml") +
+                             "\n    start: 7.4\n    frames: 30\n" + extra;
+    const fs::path dir = scratch.file(name);
+    synthesize_dataset(parse_synth_config(clips_config(clip, "{enabled: false}"), name + ".yaml"), dir.string());
+    if (!ch) ch = std::make_unique<Character>(load_character((dir / "character" / "character.yaml").string()));
+    return read_motion((dir / "gt" / "pose.motion").string(), ch->skeleton.num_dofs());
+  };
+  const Motion own = make("own", ""), treadmill = make("treadmill", "    in_place_s: 0.5\n"),
+               pinned = make("pinned", "    in_place_s: 0\n");
+  const Skeleton& skeleton = ch->skeleton;
+  const int tx = skeleton.dof_index("hips_tx"), tz = skeleton.dof_index("hips_tz");
+  ASSERT_GE(tx, 0);
+  ASSERT_GE(tz, 0);
+  auto range = [](const Eigen::MatrixXd& m, int col) {
+    double lo = m(0, col), hi = m(0, col);
+    for (int f = 1; f < m.rows(); ++f) lo = std::min(lo, m(f, col)), hi = std::max(hi, m(f, col));
+    return hi - lo;
+  };
+  auto largest = [](const Eigen::MatrixXd& m, int col) {
+    double v = 0;
+    for (int f = 0; f < m.rows(); ++f) v = std::max(v, std::abs(m(f, col)));
+    return v;
+  };
+  std::printf("root x travel: own %.2f m, in_place_s 0.5: %.2g m, in_place_s 0: %.2g m\n", range(own.dofs, tx),
+              range(treadmill.dofs, tx), range(pinned.dofs, tx));
+  EXPECT_GT(range(own.dofs, tx), 0.6);
+  // The procedural walk travels at a steady speed: the local line fits take all of it.
+  std::vector<Eigen::Vector3d> track;
+  for (int f = 0; f < own.num_frames(); ++f) track.emplace_back(own.dofs(f, tx), 0, own.dofs(f, tz));
+  const std::vector<Eigen::Vector3d> path = smooth_track(track, 0.5 * 30);
+  for (int f = 0; f < own.num_frames(); ++f) {
+    EXPECT_NEAR(treadmill.dofs(f, tx), own.dofs(f, tx) - path[f].x(), 1e-9) << f;
+    EXPECT_NEAR(treadmill.dofs(f, tz), own.dofs(f, tz) - path[f].z(), 1e-9) << f;
+  }
+  EXPECT_LT(range(treadmill.dofs, tx), 0.01);
+  EXPECT_LT(largest(pinned.dofs, tx), 1e-9);
+  EXPECT_LT(largest(pinned.dofs, tz), 1e-9);
+  // Only the horizontal root translations change: heights, turns and limbs stay.
+  const Eigen::MatrixXd change = own.dofs - treadmill.dofs;
+  for (int d = 0; d < skeleton.num_dofs(); ++d) {
+    if (d == tx || d == tz) continue;
+    EXPECT_LT(largest(change, d), 1e-12) << skeleton.dofs[d].name;
+  }
 }

@@ -20,14 +20,33 @@ std::string base(const std::string& extra = "", const std::string& motion_extra 
          "  mapping: " + repo_file("configs/retarget/humanoid_to_makehuman.yaml") + "\n" + motion_extra + extra;
 }
 
+// `motions:` lists clips, each a motion section; their frames follow one another.
+std::string clip(const char* motion, const std::string& extra = "") {
+  return "  - procedural: " + repo_file(std::string("configs/motions/") + motion + ".yaml") + "\n" +
+         "    mapping: " + repo_file("configs/retarget/humanoid_to_makehuman.yaml") + "\n" + extra;
+}
+std::string with_clips(const std::string& clips, const std::string& extra = "") {
+  return "name: t\ncharacter: " + repo_file("configs/characters/makehuman_skirt_coarse.yaml") + "\nmotions:\n" +
+         clips + extra;
+}
+
 }  // namespace
 
 TEST(SynthConfig, ShippedConfigsLoad) {
-  for (const char* name : {"tiny", "training", "in_the_wild"}) {
+  for (const char* name : {"tiny", "training", "in_the_wild", "training_set"}) {
     const SynthConfig c = load_synth_config(repo_file(std::string("configs/synth/") + name + ".yaml"));
     EXPECT_EQ(c.name, name);
-    EXPECT_GT(c.motion.frames, 0);
+    EXPECT_GT(c.frames(), 0);
   }
+  // The training set: every motion not kept for testing, ≥ 1,500 frames at 30 fps, 8 views.
+  const SynthConfig set = load_synth_config(repo_file("configs/synth/training_set.yaml"));
+  ASSERT_EQ(set.motions.size(), 4u);
+  EXPECT_TRUE(set.motion_list);
+  EXPECT_GE(set.frames(), 1500);
+  EXPECT_EQ(set.fps(), 30);
+  EXPECT_EQ(set.cameras.studio.views, 8);
+  EXPECT_EQ(set.cameras.studio.width, 256);
+  EXPECT_EQ(set.motions[3].bvh, "/usr/share/assimp/models/BVH/01_01.bvh");
   const SynthConfig wild = load_synth_config(repo_file("configs/synth/in_the_wild.yaml"));
   EXPECT_EQ(wild.cameras.kind, CameraRigKind::wild);
   EXPECT_EQ(wild.render.background, BackgroundKind::clutter);
@@ -44,8 +63,12 @@ TEST(SynthConfig, DefaultsAndOverrides) {
            "  frames: 20\n  start: 2\n"),
       "c.yaml");
   EXPECT_EQ(c.seed, 42u);
-  EXPECT_EQ(c.motion.frames, 20);
-  EXPECT_DOUBLE_EQ(c.motion.start_s, 2);
+  ASSERT_EQ(c.motions.size(), 1u);
+  EXPECT_FALSE(c.motion_list);
+  EXPECT_EQ(c.frames(), 20);
+  EXPECT_EQ(c.motions[0].frames, 20);
+  EXPECT_DOUBLE_EQ(c.motions[0].start_s, 2);
+  EXPECT_LT(c.motions[0].in_place_s, 0);  // the motion's own path
   EXPECT_EQ(c.simulation.substeps, 3);
   EXPECT_DOUBLE_EQ(c.simulation.material.density, 0.3);
   EXPECT_EQ(c.cameras.studio.views, 18);
@@ -75,4 +98,45 @@ TEST(SynthConfig, ErrorsNameTheFileAndKey) {
   expect_error([] { parse_synth_config("name: t\ncharacter: /nonexistent.yaml\nmotion: {}\n", "bad.yaml"); },
                {"bad.yaml", "character"});
   expect_error([] { load_synth_config("/nonexistent/synth.yaml"); }, {"/nonexistent/synth.yaml"});
+  expect_error([] { parse_synth_config(base("", "  in_place_s: -1\n"), "bad.yaml"); }, {"bad.yaml", "motion.in_place_s"});
+}
+
+TEST(SynthConfig, MotionsListClipsInOrder) {
+  const SynthConfig c = parse_synth_config(
+      with_clips(clip("walk_in_place", "    frames: 12\n    in_place_s: 1\n") +
+                 clip("squat_jump", "    frames: 5\n    start: 1.5\n    stride: 2\n")),
+      "c.yaml");
+  ASSERT_EQ(c.motions.size(), 2u);
+  EXPECT_TRUE(c.motion_list);
+  EXPECT_EQ(c.frames(), 17);
+  EXPECT_EQ(c.fps(), 30);
+  EXPECT_NE(c.motions[0].procedural.find("walk_in_place"), std::string::npos);
+  EXPECT_DOUBLE_EQ(c.motions[0].in_place_s, 1);
+  EXPECT_EQ(c.motions[1].stride, 2);
+  EXPECT_DOUBLE_EQ(c.motions[1].start_s, 1.5);
+  EXPECT_LT(c.motions[1].in_place_s, 0);
+  EXPECT_EQ(c.motion_key(1), "motions[1]");
+  const SynthConfig one = parse_synth_config(base(), "one.yaml");
+  EXPECT_EQ(one.motion_key(0), "motion");
+}
+
+TEST(SynthConfig, MotionsErrorsNameTheClip) {
+  // Both keys: the message names the one that is too many.
+  expect_error([] { parse_synth_config(base("motions:\n" + clip("squat_jump")), "bad.yaml"); },
+               {"bad.yaml:", "motions", "either motion (one clip) or motions"});
+  expect_error([] { parse_synth_config(with_clips("") + " []\n", "bad.yaml"); }, {"bad.yaml", "motions", "a list"});
+  expect_error([] { parse_synth_config(with_clips(clip("walk_in_place") + clip("squat_jump", "    colour: red\n")),
+                                       "bad.yaml"); },
+               {"bad.yaml:", "motions[1].colour", "unknown key"});
+  expect_error([] { parse_synth_config(with_clips(clip("walk_in_place") + clip("squat_jump", "    fps: 25\n")),
+                                       "bad.yaml"); },
+               {"bad.yaml:", "motions[1].fps", "same fps"});
+  expect_error([] { parse_synth_config(with_clips(clip("walk_in_place") + "  - {frames: 3}\n"), "bad.yaml"); },
+               {"bad.yaml:", "motions[1]", "exactly one of procedural, bvh or skeletool"});
+  expect_error([] { parse_synth_config(with_clips(clip("walk_in_place") + "  - 7\n"), "bad.yaml"); },
+               {"bad.yaml:", "motions[1]", "expected a motion section"});
+  expect_error([] { parse_synth_config("name: t\ncharacter: " +
+                                           repo_file("configs/characters/makehuman_skirt_coarse.yaml") + "\n",
+                                       "bad.yaml"); },
+               {"bad.yaml", "motion", "missing"});
 }
