@@ -1,0 +1,61 @@
+// configs/train/*.yaml: the shipped configs parse, and a bad key, type, value or a missing
+// section is one error naming the file, the line and the key.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "capture/training/training_config.h"
+#include "test_files.h"
+
+using namespace weft::capture;
+using weft::capture::testing::expect_error;
+
+namespace {
+std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
+const char* kStages = "stages:\n  pose: {steps: 4, landmarks: 1}\n";
+}  // namespace
+
+TEST(TrainingConfig, ShippedConfigsParse) {
+  for (const char* name : {"tiny", "default", "paper"}) {
+    const TrainingConfig c = load_training_config(repo_file(std::string("configs/train/") + name + ".yaml"));
+    EXPECT_GT(c.total_steps(), 0) << name;
+    ASSERT_EQ(c.stages.size(), 3u);
+    EXPECT_EQ(c.stages[0].kind, StageKind::pose);
+    EXPECT_GT(c.stages[2].steps, 0) << name << ": the physics stage";
+    EXPECT_TRUE(std::filesystem::exists(c.physics.synth_config)) << name;
+  }
+}
+
+TEST(TrainingConfig, StagesFollowEachOther) {
+  const TrainingConfig c = parse_training_config(
+      "stages:\n  pose: {steps: 3, landmarks: 1}\n  warmup: {steps: 2, silhouette: 1}\n", "t.yaml");
+  EXPECT_EQ(c.total_steps(), 5);
+  int64_t start = -1;
+  EXPECT_EQ(c.stage_of(3, &start).kind, StageKind::pose);
+  EXPECT_EQ(start, 0);
+  EXPECT_EQ(c.stage_of(4, &start).kind, StageKind::warmup);
+  EXPECT_EQ(start, 3);
+  expect_error([&] { c.stage_of(6); }, {"t.yaml", "step 6", "5 steps"});
+}
+
+TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
+  expect_error([] { parse_training_config(std::string(kStages) + "learning_rate: 3\n", "c.yaml"); },
+               {"c.yaml", "learning_rate"});
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: many}\n", "c.yaml"); },
+               {"c.yaml:2", "stages.pose.steps"});
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, lr: -1}\n", "c.yaml"); },
+               {"c.yaml", "stages.pose.lr"});
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, silhouette: 1}\n", "c.yaml"); },
+               {"c.yaml", "landmarks only"});
+  expect_error([] { parse_training_config("stages:\n  poses: {steps: 4}\n", "c.yaml"); }, {"c.yaml", "poses"});
+  expect_error([] { parse_training_config("seed: 1\n", "c.yaml"); }, {"c.yaml", "stages", "missing"});
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: 0}\n", "c.yaml"); }, {"c.yaml", "nothing to train"});
+  expect_error([] { parse_training_config(std::string(kStages) + "network: {backbone: vgg16}\n", "c.yaml"); },
+               {"c.yaml:3", "network.backbone", "vgg16"});
+  expect_error([] { parse_training_config("stages:\n  physics: {steps: 4, simulation: 1}\n", "c.yaml"); },
+               {"c.yaml", "physics.synth_config", "missing"});
+  expect_error(
+      [] { parse_training_config(std::string(kStages) + "physics: {window_frames: 2, synth_config: x}\n", "c.yaml"); },
+      {"c.yaml", "physics.window_frames"});
+  expect_error([] { load_training_config("/nonexistent/train.yaml"); }, {"/nonexistent/train.yaml", "cannot open"});
+}
