@@ -13,6 +13,7 @@
 #include "capture/io/mesh_io.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/io/strict_yaml.h"
+#include "capture/io/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -94,11 +95,7 @@ DefaultCharacterConfig parse_default_character_config(const std::string& yaml_te
 }
 
 DefaultCharacterConfig load_default_character_config(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, ": cannot open file for reading");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_default_character_config(ss.str(), path);
+  return parse_default_character_config(read_file_bytes(path), path);
 }
 
 // ------------------------------------------------------------------ building

@@ -27,6 +27,7 @@
 #include "capture/motion/procedural_motion.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/io/strict_yaml.h"
+#include "capture/io/text_reader.h"
 #include "graph/atomic_file.h"
 #include "graph/error.h"
 #include "physics/cloth_metrics.h"
@@ -450,13 +451,7 @@ SynthConfig parse_synth_config(const std::string& text, const std::string& name)
   return c;
 }
 
-SynthConfig load_synth_config(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  WEFT_CHECK(in.good(), path, ": cannot open the synth config");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_synth_config(ss.str(), path);
-}
+SynthConfig load_synth_config(const std::string& path) { return parse_synth_config(read_file_bytes(path), path); }
 
 SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_dir,
                                 const std::function<void(const SynthProgress&)>& progress) {

@@ -16,6 +16,7 @@
 #include "capture/deformation/losses.h"
 #include "capture/io/atomic_file.h"
 #include "capture/io/portable_random.h"
+#include "capture/io/text_reader.h"
 #include "capture/render/renderer.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/training/capture_networks.h"
@@ -53,13 +54,6 @@ struct PartTimes {
   }
 };
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  WEFT_CHECK(in.good(), path, ": cannot open");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string checkpoint_file(int64_t step) {
   char buf[64];
@@ -610,9 +604,9 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const T
   if (!options.resume && fs::exists(run / "checkpoints") && !list_checkpoints(run / "checkpoints").empty())
     fail(options.run, ": already holds a run (checkpoints/); pass --resume to continue it or choose another folder");
   fs::create_directories(run);
-  const std::string text = read_text(options.config);
+  const std::string text = read_file_bytes(options.config);
   if (options.resume && fs::exists(saved)) {
-    WEFT_CHECK(read_text(saved.string()) == text, options.config, ": differs from ", saved.string(),
+    WEFT_CHECK(read_file_bytes(saved.string()) == text, options.config, ": differs from ", saved.string(),
                ", the config the run was started with; resume with that one");
   } else {
     write_text_atomically(saved.string(), text);

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "capture/io/strict_yaml.h"
+#include "capture/io/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -122,11 +123,7 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
 }
 
 TrainingConfig load_training_config(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  WEFT_CHECK(in.good(), path, ": cannot open the training config");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_training_config(ss.str(), path);
+  return parse_training_config(read_file_bytes(path), path);
 }
 
 }  // namespace weft::capture
