@@ -17,14 +17,12 @@ using Eigen::Vector3d;
 
 using weft::capture::testing::slurp;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
 
-const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
-std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 
-#define SKIP_WITHOUT_HUMAN()                                                                   \
-  if (!std::filesystem::exists(kHuman))                                                        \
-  GTEST_SKIP() << kHuman << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
 
 // Built once per test program: each character takes a few seconds.
 const DefaultCharacter& built(const std::string& config) {

@@ -12,6 +12,7 @@
 #include <memory>
 #include <sstream>
 
+#include "tests/capture/test_files.h"
 #include "capture/studio/cloth_perturbation.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
@@ -25,14 +26,12 @@ using weft::physics::StepStatus;
 using weft::physics::Vec3;
 namespace fs = std::filesystem;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
 
-const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
-std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 
-#define SKIP_WITHOUT_HUMAN()                                                                   \
-  if (!fs::exists(kHuman))                                                                     \
-  GTEST_SKIP() << kHuman << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
 
 fs::path scratch_root() { return fs::temp_directory_path() / ("weft_windows_test_" + std::to_string(::getpid())); }
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
+#include "tests/capture/test_files.h"
 #include "capture/character/default_character.h"
 #include "capture/render/renderer.h"
 #include "capture/studio/studio_rig.h"
@@ -14,13 +15,12 @@
 
 using namespace weft::capture;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
 
-const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
 
-#define SKIP_WITHOUT_HUMAN()             \
-  if (!std::filesystem::exists(kHuman)) \
-  GTEST_SKIP() << kHuman << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
 
 struct Scene {
   DefaultCharacter built;

@@ -37,14 +37,12 @@ namespace fs = std::filesystem;
 
 using weft::capture::testing::slurp;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
 
-const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
-std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 
-#define SKIP_WITHOUT_HUMAN()                                                                   \
-  if (!fs::exists(kHuman))                                                                     \
-  GTEST_SKIP() << kHuman << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
 
 // 4 frames of the procedural walk, coarse skirt, 6 studio views at 256².
 std::string config_text(uint64_t seed) {

@@ -8,9 +8,11 @@ using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
 
-std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 
 std::string base(const std::string& extra = "", const std::string& motion_extra = "") {
   return "name: t\n"

@@ -11,6 +11,18 @@
 
 namespace weft::capture::testing {
 
+// The MakeHuman body of Debian's assimp-testmodels, which the generated character needs.
+inline constexpr const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
+
+// A file of the source tree (configs, data), from the test's build definitions.
+inline std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
+
+// Skips a test that needs kHuman when the package is not installed.
+#define SKIP_WITHOUT_HUMAN()                                        \
+  if (!std::filesystem::exists(::weft::capture::testing::kHuman))   \
+  GTEST_SKIP() << ::weft::capture::testing::kHuman                  \
+               << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
+
 // A fresh folder under the system temp dir, removed when the object dies.
 class ScratchDir {
  public:

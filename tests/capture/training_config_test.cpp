@@ -10,8 +10,10 @@
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
-std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 const char* kStages = "stages:\n  pose: {steps: 4, landmarks: 1}\n";
 }  // namespace
 

@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "tests/capture/test_files.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/io/openpose.h"
 #include "capture/studio/synthetic_studio.h"
@@ -30,15 +31,13 @@
 using namespace weft::capture;
 namespace fs = std::filesystem;
 
+using weft::capture::testing::kHuman;
+using weft::capture::testing::repo_file;
+
 namespace {
 
-const char* kHuman = "/usr/share/assimp/models/Collada/human.zae";
-std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 std::string weft_binary() { return std::string(WEFT_BINARY_DIR) + "/apps/weft"; }
 
-#define SKIP_WITHOUT_HUMAN()                                                                   \
-  if (!fs::exists(kHuman))                                                                     \
-  GTEST_SKIP() << kHuman << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
 
 fs::path scratch_root() { return fs::temp_directory_path() / ("weft_training_test_" + std::to_string(::getpid())); }
 
