@@ -160,7 +160,8 @@ class Trainer {
   }
   CapturePrediction forward(const Batch& batch, StageKind stage, bool training, PartTimes* times = nullptr);
   std::map<std::string, Tensor> image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
-                                                            const LossWeights& w, LandmarkStatistics* stats);
+                                                            StageKind stage, const LossWeights& w,
+                                                            LandmarkStatistics* stats);
   StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch,
                         PartTimes& times);
   Batch physics_batch(int64_t step, const StageConfig& stage, bool parallel) const;
@@ -200,7 +201,8 @@ CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool tra
 }
 
 std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
-                                                                   const LossWeights& w, LandmarkStatistics* stats) {
+                                                                   StageKind stage, const LossWeights& w,
+                                                                   LandmarkStatistics* stats) {
   std::map<std::string, Tensor> t;
   const double m2 = character_.metres_per_unit * character_.metres_per_unit;  // units² → m²
   if (w.landmarks > 0 || stats)
@@ -212,7 +214,9 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
   if (w.arap > 0 && p.body_rotations.defined()) {
     Tensor a = ops::scale(arap_loss(body_arap_, p.body_rotations, p.body_translations),
                           m2 / std::max<int64_t>(1, body_arap_.edges.size(0)));
-    if (p.cloth_rotations.defined())
+    // In the physics stage the simulation loss takes the garment's ARAP's place; the body,
+    // which is not simulated, keeps its own.
+    if (p.cloth_rotations.defined() && stage != StageKind::physics)
       a = ops::add(a, ops::scale(arap_loss(cloth_arap_, p.cloth_rotations, p.cloth_translations),
                                  m2 / std::max<int64_t>(1, cloth_arap_.edges.size(0))));
     t["arap"] = a;
@@ -306,7 +310,7 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   if (simulating)
     simulated = std::async(std::launch::async, [&] { return simulate(p, batch.size() / cfg_.physics.window_frames, r); });
   LandmarkStatistics stats;
-  std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
+  std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.kind, stage.weights, &stats);
   times.lap("losses", t);
   if (simulating) {
     const Tensor sim = simulation_term(p, simulated.get());
@@ -427,6 +431,17 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   return rep;
 }
 
+// Keeps the validations of steps ≤ `step` (a resumed run validates the later ones again).
+void cut_validation(const fs::path& path, int64_t step) {
+  if (!fs::exists(path)) return;
+  std::istringstream in(read_file_bytes(path.string()));
+  std::string line, kept;
+  for (int i = 0; std::getline(in, line); ++i)
+    if (i == 0 || (!line.empty() && std::stoll(line.substr(0, line.find(','))) <= step)) kept += line + "\n";
+  if (step == 0) fs::remove(path);
+  else write_text_atomically(path.string(), kept);
+}
+
 void append_validation(const fs::path& path, const ValidationReport& r) {
   const bool fresh = !fs::exists(path);
   std::ofstream out(path, std::ios::app);
@@ -488,7 +503,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     spdlog::info("{}: no checkpoint yet: starting from step 1", ckdir.string());
   }
   LossLog log((run / "losses.csv").string(), options_.resume ? done : -1);
-  if (!options_.resume) fs::remove(run / "validation.csv");
+  cut_validation(run / "validation.csv", options_.resume ? done : 0);
   const int64_t total = cfg_.total_steps();
   const int64_t last_step = options_.stop_after >= 0 ? std::min(total, options_.stop_after) : total;
   summary.first_step = done + 1;
