@@ -70,15 +70,15 @@ std::string SplitEvaluation::to_json() const {
   return fmt::format(
       "{{\n  \"split\": \"{}\",\n  \"frames\": {},\n  \"views\": {},\n  \"predictions\": {},\n"
       "  \"keypoint_error_px\": {:.4f},\n  \"mean_pose_keypoint_error_px\": {:.4f},\n"
-      "  \"joint_error_mm\": {:.3f},\n  \"joint_error_root_aligned_mm\": {:.3f},\n  \"root_rotation_error_deg\": {:.3f},\n"
-      "  \"mean_pose_joint_error_root_aligned_mm\": {:.3f},\n  \"silhouette_iou\": {:.5f},\n"
-      "  \"template_silhouette_iou\": {:.5f},\n  \"cloth_error_mm\": {:.3f},\n  \"body_error_mm\": {:.3f},\n"
+      "  \"joint_error_mm\": {:.3f},\n  \"joint_error_root_relative_mm\": {:.3f},\n  \"root_rotation_error_deg\": {:.3f},\n"
+      "  \"mean_pose_joint_error_root_relative_mm\": {:.3f},\n  \"silhouette_iou\": {:.5f},\n"
+      "  \"template_silhouette_iou\": {:.5f},\n  \"cloth_error_mm\": {:.3f},\n  \"skinned_true_pose_cloth_error_mm\": {:.3f},\n  \"body_error_mm\": {:.3f},\n"
       "  \"penetration_mean_mm\": {:.4f},\n  \"penetration_max_mm\": {:.4f},\n  \"penetrating_fraction\": {:.6f},\n"
       "  \"oob_frames\": {},\n  \"oob_force_mean_n\": {:.6g},\n  \"oob_force_max_n\": {:.6g},\n"
       "  \"oob_force_mean_rel\": {:.6g},\n  \"oob_force_max_rel\": {:.6g},\n  \"seconds\": {:.1f}\n}}\n",
       split, frames, views, predictions, keypoint_error_px, mean_pose_keypoint_error_px, joint_error_mm,
-      joint_error_root_aligned_mm, root_rotation_error_deg, mean_pose_joint_error_root_aligned_mm, silhouette_iou, template_silhouette_iou,
-      cloth_error_mm, body_error_mm, penetration_mean_mm, penetration_max_mm, penetrating_fraction, oob_frames,
+      joint_error_root_relative_mm, root_rotation_error_deg, mean_pose_joint_error_root_relative_mm, silhouette_iou, template_silhouette_iou,
+      cloth_error_mm, skinned_true_pose_cloth_error_mm, body_error_mm, penetration_mean_mm, penetration_max_mm, penetrating_fraction, oob_frames,
       oob_force_mean_n, oob_force_max_n, oob_force_mean_rel, oob_force_max_rel, seconds);
 }
 
@@ -107,6 +107,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   const fs::path gt_dir = fs::path(data) / "gt";
   const Motion motion = read_motion((gt_dir / "pose.motion").string(), int(ch.rest_dofs.size()));
   std::map<int, Vertices> gt_keypoints, gt_cloth, gt_body;
+  Mean skinned_cloth_err;  // the template skinned by the true pose against the simulated garment
   std::map<int, Eigen::Vector3d> gt_pivot;
   std::map<int, Eigen::Matrix3d> gt_rotation;
   const Eigen::Matrix3d rest_rotation = forward_kinematics(ch.skeleton, ch.rest_dofs)[param.pivot_joint].linear();
@@ -117,7 +118,10 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
     gt_pivot[f] = posed.joints[param.pivot_joint].translation();
     gt_rotation[f] = posed.joints[param.pivot_joint].linear() * rest_rotation.transpose();
     gt_body[f] = read_ply((gt_dir / fmt::format("body_{:04d}.ply", f)).string()).V;
-    if (ch.has_cloth()) gt_cloth[f] = read_ply((gt_dir / fmt::format("cloth_{:04d}.ply", f)).string()).V;
+    if (ch.has_cloth()) {
+      gt_cloth[f] = read_ply((gt_dir / fmt::format("cloth_{:04d}.ply", f)).string()).V;
+      skinned_cloth_err.add(mean_distance(posed.cloth, gt_cloth[f]) * ch.metres_per_unit * 1e3);
+    }
   }
   // The mean training pose (regressed dofs averaged, the root chain at rest).
   Eigen::VectorXd mean_dofs = ch.rest_dofs;
@@ -192,12 +196,12 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         for (int m = 0; m < kBody25Count; ++m) {
           if (model.keypoint_mask()[m] <= 0 || !G.row(m).allFinite()) continue;
           joint.add((K.row(m) - G.row(m)).norm() * mpu * 1e3);
-          // Articulation: both skeletons in their own root frame (pivot at the origin, root
-          // rotation undone), so the mean pose needs no rotation to be compared.
-          const Eigen::Vector3d g_local = R_gt.transpose() * (G.row(m).transpose() - gt_pivot[f]);
-          const Eigen::Vector3d p_local = R_pred.transpose() * (K.row(m) - t_pred).transpose();
-          joint_aligned.add((p_local - g_local).norm() * mpu * 1e3);
-          mean_joint_aligned.add((mean_keypoints.row(m).transpose() - param.pivot - g_local).norm() * mpu * 1e3);
+          // Root-relative (the pivot joint at the origin, rotations kept): how the root
+          // rotation and the articulation split a pose is not unique (hips and spine can
+          // turn the body too), the posed skeleton is.
+          const Eigen::Vector3d g_rel = G.row(m).transpose() - gt_pivot[f];
+          joint_aligned.add(((K.row(m) - t_pred).transpose() - g_rel).norm() * mpu * 1e3);
+          mean_joint_aligned.add((R_gt * (mean_keypoints.row(m).transpose() - param.pivot) - g_rel).norm() * mpu * 1e3);
         }
         const Vertices body = sample_vertices(p.body, b), body_t = sample_vertices(t.body, b);
         body_err.add(mean_distance(body, gt_body[f]) * mpu * 1e3);
@@ -249,12 +253,13 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.keypoint_error_px = kp.value();
   e.mean_pose_keypoint_error_px = mean_kp.value();
   e.joint_error_mm = joint.value(-1);
-  e.joint_error_root_aligned_mm = joint_aligned.value(-1);
+  e.joint_error_root_relative_mm = joint_aligned.value(-1);
   e.root_rotation_error_deg = rotation_err.value(-1);
-  e.mean_pose_joint_error_root_aligned_mm = mean_joint_aligned.value(-1);
+  e.mean_pose_joint_error_root_relative_mm = mean_joint_aligned.value(-1);
   e.silhouette_iou = iou.value();
   e.template_silhouette_iou = tmpl_iou.value();
   e.cloth_error_mm = cloth_err.value(-1);
+  e.skinned_true_pose_cloth_error_mm = skinned_cloth_err.value(-1);
   e.body_error_mm = body_err.value(-1);
   e.penetration_mean_mm = pen.value();
   e.penetrating_fraction = inside.value();

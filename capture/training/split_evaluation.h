@@ -4,14 +4,17 @@
 // a sequence of predictions over the split's consecutive frames. Reported (means over
 // frames × input views unless said):
 // - keypoints: 2D error over all views (px) with the root translation solved from the
-//   frame's detections; the 3D BODY_25 error against gt/pose.motion (mm), absolute and in
-//   the root's own frame (pivot at the origin, root rotation undone: the articulation
-//   alone), and the root rotation's error (degrees). The floor to beat is the mean
-//   training pose (gt/pose.motion's regressed dofs averaged over the train split): its
-//   articulation error, and its 2D error when given the true root rotation (an oracle).
+//   frame's detections; the 3D BODY_25 error against gt/pose.motion (mm), absolute and
+//   root-relative (both skeletons' pivot joint at the origin, rotations kept), and the
+//   root rotation's error (degrees; only indicative: hips and spine can turn the body
+//   too, so how a pose splits into root rotation and articulation is not unique). The
+//   floor to beat is the mean training pose (gt/pose.motion's regressed dofs averaged
+//   over the train split) given the true root rotation (an oracle), root-relative and in 2D.
 // - silhouette IoU of the rendered body + cloth against the masks, over all views, and
 //   the same for the skinned template (PADefNet off) in the predicted pose.
-// - cloth and body vertex error against gt/cloth_*.ply and gt/body_*.ply (mm).
+// - cloth and body vertex error against gt/cloth_*.ply and gt/body_*.ply (mm), and for
+//   reference the cloth error of the template skinned by the true pose (what a perfect
+//   PoseNet with no PADefNet would leave).
 // - penetration of cloth vertices into the body (mm, over penetrating vertices) and the
 //   fraction of cloth vertices inside.
 // - out-of-balance force of each three consecutive predicted frames of one input view
@@ -26,10 +29,10 @@ struct SplitEvaluation {
   std::string split;
   int frames = 0, views = 0, predictions = 0;
   double keypoint_error_px = 0, mean_pose_keypoint_error_px = 0;
-  double joint_error_mm = -1, joint_error_root_aligned_mm = -1, mean_pose_joint_error_root_aligned_mm = -1;
+  double joint_error_mm = -1, joint_error_root_relative_mm = -1, mean_pose_joint_error_root_relative_mm = -1;
   double root_rotation_error_deg = -1;
   double silhouette_iou = 0, template_silhouette_iou = 0;
-  double cloth_error_mm = -1, body_error_mm = -1;
+  double cloth_error_mm = -1, skinned_true_pose_cloth_error_mm = -1, body_error_mm = -1;
   double penetration_mean_mm = 0, penetration_max_mm = 0, penetrating_fraction = 0;
   int oob_frames = 0;
   double oob_force_mean_n = 0, oob_force_max_n = 0, oob_force_mean_rel = 0, oob_force_max_rel = 0;
