@@ -211,14 +211,14 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
     const Tensor all = p.cloth.defined() ? ops::concat({p.body, p.cloth}, 1) : p.body;
     t["silhouette"] = multiview_silhouette_loss(all, faces_, batch.frames, *supervision_);
   }
-  if (w.arap > 0 && p.body_rotations.defined()) {
+  // Each graph's term carries its own weight here: `arap` (the body's) weighs the sum.
+  if ((w.arap > 0 || w.cloth_arap > 0) && p.body_rotations.defined()) {
+    const double body_w = w.arap > 0 ? 1.0 : 0.0, cloth_w = w.arap > 0 ? w.cloth_arap / w.arap : 0.0;
     Tensor a = ops::scale(arap_loss(body_arap_, p.body_rotations, p.body_translations),
-                          m2 / std::max<int64_t>(1, body_arap_.edges.size(0)));
-    // In the physics stage the simulation loss takes the garment's ARAP's place; the body,
-    // which is not simulated, keeps its own.
-    if (p.cloth_rotations.defined() && stage != StageKind::physics)
+                          body_w * m2 / std::max<int64_t>(1, body_arap_.edges.size(0)));
+    if (p.cloth_rotations.defined() && cloth_w > 0)
       a = ops::add(a, ops::scale(arap_loss(cloth_arap_, p.cloth_rotations, p.cloth_translations),
-                                 m2 / std::max<int64_t>(1, cloth_arap_.edges.size(0))));
+                                 cloth_w * m2 / std::max<int64_t>(1, cloth_arap_.edges.size(0))));
     t["arap"] = a;
   }
   if (w.attachment > 0 && p.cloth.defined() && attachment_.anchors.numel() > 0)

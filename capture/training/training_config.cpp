@@ -50,11 +50,15 @@ void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
              {"landmarks", &s.weights.landmarks, 0, 1e9},
              {"silhouette", &s.weights.silhouette, 0, 1e9},
              {"arap", &s.weights.arap, 0, 1e9},
+             {"cloth_arap", &s.weights.cloth_arap, 0, 1e9},
              {"attachment", &s.weights.attachment, 0, 1e9},
              {"simulation", &s.weights.simulation, 0, 1e9}},
             {{"steps", &s.steps, 0, 1e8}, {"batch_size", &s.batch_size, 1, 4096}}, {});
-  if (s.kind == StageKind::pose && (s.weights.silhouette > 0 || s.weights.arap > 0 || s.weights.attachment > 0 ||
-                                    s.weights.simulation > 0))
+  if (s.weights.cloth_arap < 0) s.weights.cloth_arap = s.weights.arap;
+  if (s.weights.cloth_arap > 0 && s.weights.arap <= 0)
+    y.fail_at(n["cloth_arap"], where + "cloth_arap", "needs arap > 0 (arap weighs the body's graph; cloth_arap the garment's)");
+  if (s.kind == StageKind::pose && (s.weights.silhouette > 0 || s.weights.arap > 0 || s.weights.cloth_arap > 0 ||
+                                    s.weights.attachment > 0 || s.weights.simulation > 0))
     y.fail_at(n, where + "landmarks", "the pose stage trains PoseNet on landmarks only: other weights must be 0");
   if (s.kind == StageKind::warmup && s.weights.simulation > 0)
     y.fail_at(n["simulation"], where + "simulation", "the warm start has no simulation loss (that is the physics stage)");

@@ -15,7 +15,8 @@ namespace weft::capture {
 struct LossWeights {
   double landmarks = 0;   // L_lm, over all views of the frame
   double silhouette = 0;  // L_sil, over all views of the frame
-  double arap = 0;        // L_arap, both embedded graphs
+  double arap = 0;        // L_arap of the body's embedded graph
+  double cloth_arap = -1; // L_arap of the garment's graph (< 0: the same as `arap`)
   double attachment = 0;  // L_att
   double simulation = 0;  // L_sim
 };
