@@ -160,8 +160,7 @@ class Trainer {
   }
   CapturePrediction forward(const Batch& batch, StageKind stage, bool training, PartTimes* times = nullptr);
   std::map<std::string, Tensor> image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
-                                                            StageKind stage, const LossWeights& w,
-                                                            LandmarkStatistics* stats);
+                                                            const LossWeights& w, LandmarkStatistics* stats);
   StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch,
                         PartTimes& times);
   Batch physics_batch(int64_t step, const StageConfig& stage, bool parallel) const;
@@ -201,8 +200,7 @@ CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool tra
 }
 
 std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
-                                                                   StageKind stage, const LossWeights& w,
-                                                                   LandmarkStatistics* stats) {
+                                                                   const LossWeights& w, LandmarkStatistics* stats) {
   std::map<std::string, Tensor> t;
   const double m2 = character_.metres_per_unit * character_.metres_per_unit;  // units² → m²
   if (w.landmarks > 0 || stats)
@@ -310,7 +308,7 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   if (simulating)
     simulated = std::async(std::launch::async, [&] { return simulate(p, batch.size() / cfg_.physics.window_frames, r); });
   LandmarkStatistics stats;
-  std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.kind, stage.weights, &stats);
+  std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
   times.lap("losses", t);
   if (simulating) {
     const Tensor sim = simulation_term(p, simulated.get());

@@ -28,6 +28,14 @@ TEST(TrainingConfig, ShippedConfigsParse) {
   }
 }
 
+TEST(TrainingConfig, TheGarmentsArapFollowsTheBodysUnlessGiven) {
+  const TrainingConfig c = parse_training_config(
+      "stages:\n  warmup: {steps: 2, arap: 3}\n  physics: {steps: 2, arap: 3, cloth_arap: 0.5, simulation: 1}\n"
+      "physics: {synth_config: " + repo_file("configs/synth/tiny.yaml") + "}\n", "t.yaml");
+  EXPECT_EQ(c.stages[1].weights.cloth_arap, 3);
+  EXPECT_EQ(c.stages[2].weights.cloth_arap, 0.5);
+}
+
 TEST(TrainingConfig, StagesFollowEachOther) {
   const TrainingConfig c = parse_training_config(
       "stages:\n  pose: {steps: 3, landmarks: 1}\n  warmup: {steps: 2, silhouette: 1}\n", "t.yaml");
@@ -59,5 +67,7 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error(
       [] { parse_training_config(std::string(kStages) + "physics: {window_frames: 2, synth_config: x}\n", "c.yaml"); },
       {"c.yaml", "physics.window_frames"});
+  expect_error([] { parse_training_config("stages:\n  warmup: {steps: 4, silhouette: 1, cloth_arap: 2}\n", "c.yaml"); },
+               {"c.yaml:2", "stages.warmup.cloth_arap", "arap > 0"});
   expect_error([] { load_training_config("/nonexistent/train.yaml"); }, {"/nonexistent/train.yaml", "cannot open"});
 }
