@@ -29,12 +29,12 @@ void run_evaluation(const capture::TrainOptions& o, const std::string& split) {
   weft::write_text_atomically(out, e.to_json());
   spdlog::info("{} frames × {} views ({:.1f} s): keypoints {:.2f} px (mean pose with the true root rotation {:.2f}), joints {:.1f} mm, "
                "root-relative {:.1f} mm (mean pose with the true root rotation {:.1f}), root rotation {:.1f}°; silhouette IoU {:.4f} (template {:.4f}); cloth {:.1f} mm "
-               "(the template skinned by the true pose {:.1f}), body {:.1f} mm; penetration {:.2f} mm mean, {:.2f} max, {:.2f} % of cloth vertices; "
+               "(PADefNet off {:.1f}, the template skinned by the true pose {:.1f}), body {:.1f} mm; penetration {:.2f} mm mean, {:.2f} max, {:.2f} % of cloth vertices; "
                "out-of-balance {:.3g} N mean ({:.3g} m g), {:.3g} N max ({:.3g} m g) over {} frames",
                e.frames, e.views, e.seconds, e.keypoint_error_px, e.mean_pose_keypoint_error_px, e.joint_error_mm,
                e.joint_error_root_relative_mm, e.mean_pose_joint_error_root_relative_mm, e.root_rotation_error_deg,
                e.silhouette_iou,
-               e.template_silhouette_iou, e.cloth_error_mm, e.skinned_true_pose_cloth_error_mm, e.body_error_mm, e.penetration_mean_mm,
+               e.template_silhouette_iou, e.cloth_error_mm, e.template_cloth_error_mm, e.skinned_true_pose_cloth_error_mm, e.body_error_mm, e.penetration_mean_mm,
                e.penetration_max_mm, 100 * e.penetrating_fraction, e.oob_force_mean_n, e.oob_force_mean_rel,
                e.oob_force_max_n, e.oob_force_max_rel, e.oob_frames);
   spdlog::info("wrote {}", out);

@@ -72,13 +72,13 @@ std::string SplitEvaluation::to_json() const {
       "  \"keypoint_error_px\": {:.4f},\n  \"mean_pose_keypoint_error_px\": {:.4f},\n"
       "  \"joint_error_mm\": {:.3f},\n  \"joint_error_root_relative_mm\": {:.3f},\n  \"root_rotation_error_deg\": {:.3f},\n"
       "  \"mean_pose_joint_error_root_relative_mm\": {:.3f},\n  \"silhouette_iou\": {:.5f},\n"
-      "  \"template_silhouette_iou\": {:.5f},\n  \"cloth_error_mm\": {:.3f},\n  \"skinned_true_pose_cloth_error_mm\": {:.3f},\n  \"body_error_mm\": {:.3f},\n"
+      "  \"template_silhouette_iou\": {:.5f},\n  \"cloth_error_mm\": {:.3f},\n  \"template_cloth_error_mm\": {:.3f},\n  \"skinned_true_pose_cloth_error_mm\": {:.3f},\n  \"body_error_mm\": {:.3f},\n"
       "  \"penetration_mean_mm\": {:.4f},\n  \"penetration_max_mm\": {:.4f},\n  \"penetrating_fraction\": {:.6f},\n"
       "  \"oob_frames\": {},\n  \"oob_force_mean_n\": {:.6g},\n  \"oob_force_max_n\": {:.6g},\n"
       "  \"oob_force_mean_rel\": {:.6g},\n  \"oob_force_max_rel\": {:.6g},\n  \"seconds\": {:.1f}\n}}\n",
       split, frames, views, predictions, keypoint_error_px, mean_pose_keypoint_error_px, joint_error_mm,
       joint_error_root_relative_mm, root_rotation_error_deg, mean_pose_joint_error_root_relative_mm, silhouette_iou, template_silhouette_iou,
-      cloth_error_mm, skinned_true_pose_cloth_error_mm, body_error_mm, penetration_mean_mm, penetration_max_mm, penetrating_fraction, oob_frames,
+      cloth_error_mm, template_cloth_error_mm, skinned_true_pose_cloth_error_mm, body_error_mm, penetration_mean_mm, penetration_max_mm, penetrating_fraction, oob_frames,
       oob_force_mean_n, oob_force_max_n, oob_force_mean_rel, oob_force_max_rel, seconds);
 }
 
@@ -108,6 +108,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   const Motion motion = read_motion((gt_dir / "pose.motion").string(), int(ch.rest_dofs.size()));
   std::map<int, Vertices> gt_keypoints, gt_cloth, gt_body;
   Mean skinned_cloth_err;  // the template skinned by the true pose against the simulated garment
+  Mean template_cloth_err;  // the template skinned by the predicted pose (PADefNet off)
   std::map<int, Eigen::Vector3d> gt_pivot;
   std::map<int, Eigen::Matrix3d> gt_rotation;
   const Eigen::Matrix3d rest_rotation = forward_kinematics(ch.skeleton, ch.rest_dofs)[param.pivot_joint].linear();
@@ -209,6 +210,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         if (p.cloth.defined()) {
           cloth = sample_vertices(p.cloth, b), cloth_t = sample_vertices(t.cloth, b);
           cloth_err.add(mean_distance(cloth, gt_cloth[f]) * mpu * 1e3);
+          template_cloth_err.add(mean_distance(cloth_t, gt_cloth[f]) * mpu * 1e3);
         }
         std::vector<double> ious(V), tmpl(V);
         tbb::parallel_for(0, V, [&](int w) {
@@ -260,6 +262,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.template_silhouette_iou = tmpl_iou.value();
   e.cloth_error_mm = cloth_err.value(-1);
   e.skinned_true_pose_cloth_error_mm = skinned_cloth_err.value(-1);
+  e.template_cloth_error_mm = template_cloth_err.value(-1);
   e.body_error_mm = body_err.value(-1);
   e.penetration_mean_mm = pen.value();
   e.penetrating_fraction = inside.value();

@@ -13,8 +13,8 @@
 // - silhouette IoU of the rendered body + cloth against the masks, over all views, and
 //   the same for the skinned template (PADefNet off) in the predicted pose.
 // - cloth and body vertex error against gt/cloth_*.ply and gt/body_*.ply (mm), and for
-//   reference the cloth error of the template skinned by the true pose (what a perfect
-//   PoseNet with no PADefNet would leave).
+//   reference the cloth error of the template skinned by the predicted pose (PADefNet
+//   off) and by the true pose (what a perfect PoseNet with no PADefNet would leave).
 // - penetration of cloth vertices into the body (mm, over penetrating vertices) and the
 //   fraction of cloth vertices inside.
 // - out-of-balance force of each three consecutive predicted frames of one input view
@@ -32,7 +32,8 @@ struct SplitEvaluation {
   double joint_error_mm = -1, joint_error_root_relative_mm = -1, mean_pose_joint_error_root_relative_mm = -1;
   double root_rotation_error_deg = -1;
   double silhouette_iou = 0, template_silhouette_iou = 0;
-  double cloth_error_mm = -1, skinned_true_pose_cloth_error_mm = -1, body_error_mm = -1;
+  double cloth_error_mm = -1, template_cloth_error_mm = -1, skinned_true_pose_cloth_error_mm = -1,
+         body_error_mm = -1;
   double penetration_mean_mm = 0, penetration_max_mm = 0, penetrating_fraction = 0;
   int oob_frames = 0;
   double oob_force_mean_n = 0, oob_force_max_n = 0, oob_force_mean_rel = 0, oob_force_max_rel = 0;
