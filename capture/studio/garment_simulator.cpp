@@ -40,6 +40,13 @@ std::vector<physics::Vec3> garment_pin_targets(const Character& ch, const Vertic
   return t;
 }
 
+physics::BodyMesh body_obstacle(const Character& ch, const Eigen::MatrixX3d& body_metres) {
+  const Faces& F = ch.body.mesh.F;
+  std::vector<std::array<int, 3>> faces(F.rows());
+  for (int i = 0; i < F.rows(); ++i) faces[i] = {F(i, 0), F(i, 1), F(i, 2)};
+  return physics::BodyMesh(body_metres, std::move(faces), ch.inactive_body_faces);
+}
+
 std::unique_ptr<physics::ClothSimulator> make_garment_simulator(const Character& ch,
                                                                 const SynthSimulationConfig& s, double fps,
                                                                 const Eigen::MatrixX3d& body_metres,
@@ -51,10 +58,7 @@ std::unique_ptr<physics::ClothSimulator> make_garment_simulator(const Character&
   auto sim = std::make_unique<physics::ClothSimulator>(
       physics::make_cloth_mesh(to_positions(cloth_mesh.V, ch.metres_per_unit), tris, s.material.density),
       garment_simulation_settings(s, fps));
-  std::vector<std::array<int, 3>> body_faces(ch.body.mesh.num_faces());
-  for (int i = 0; i < ch.body.mesh.num_faces(); ++i)
-    body_faces[i] = {ch.body.mesh.F(i, 0), ch.body.mesh.F(i, 1), ch.body.mesh.F(i, 2)};
-  sim->add_body(physics::BodyMesh(body_metres, body_faces, ch.inactive_body_faces), s.friction);
+  sim->add_body(body_obstacle(ch, body_metres), s.friction);
   sim->set_pins(garment_pin_vertices(ch), pin_targets);
   return sim;
 }

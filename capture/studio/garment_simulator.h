@@ -32,6 +32,10 @@ std::vector<int> garment_pin_vertices(const Character& character);
 // PosedCharacter::cloth): where the skin carries each anchor.
 std::vector<physics::Vec3> garment_pin_targets(const Character& character, const Vertices& posed_cloth);
 
+// The body as the simulator collides with it: vertices in metres (n × 3), the
+// character's inactive faces (arms, hands) left out.
+physics::BodyMesh body_obstacle(const Character& character, const Eigen::MatrixX3d& body_metres);
+
 // A configured simulator: body obstacle at `body_metres` (n × 3, metres), pins at
 // `pin_targets` (garment_pin_vertices order). The character needs a garment.
 std::unique_ptr<physics::ClothSimulator> make_garment_simulator(const Character& character,

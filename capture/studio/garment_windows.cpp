@@ -92,17 +92,13 @@ Penetration body_penetration(const physics::BodyMesh& body, const physics::Posit
     const physics::ClosestPoint c = body.closest_point(x.segment<3>(3 * i));
     if (c.face >= 0 && c.distance < 0) {
       p.max_depth = std::max(p.max_depth, -c.distance);
+      p.depth_sum -= c.distance;
       ++p.vertices_inside;
     }
   }
   return p;
 }
 
-physics::BodyMesh collision_body(const GarmentSequence& s, int frame) {
-  const TriangleMesh& m = s.character.body.mesh;
-  std::vector<std::array<int, 3>> faces(m.num_faces());
-  for (int i = 0; i < m.num_faces(); ++i) faces[i] = {m.F(i, 0), m.F(i, 1), m.F(i, 2)};
-  return physics::BodyMesh(s.body(frame), faces, s.character.inactive_body_faces);
-}
+physics::BodyMesh collision_body(const GarmentSequence& s, int frame) { return body_obstacle(s.character, s.body(frame)); }
 
 }  // namespace weft::capture

@@ -45,6 +45,7 @@ physics::SimulationWindow garment_window(const GarmentSequence& sequence, int st
 // simulator collides with), and how many vertices are inside.
 struct Penetration {
   double max_depth = 0;
+  double depth_sum = 0;  // m, over the vertices inside
   int vertices_inside = 0;
 };
 Penetration body_penetration(const physics::BodyMesh& body, const physics::Positions& x);

@@ -189,14 +189,18 @@ CapturePrediction CaptureModel::predict(const Tensor& pose_output, const Tensor&
   return p;
 }
 
-CapturePrediction predict_batch(CaptureNetworks& nets, const CaptureModel& model, const Batch& batch,
-                                const MultiviewSupervision& sup, Learning learning, bool deformation,
-                                bool with_meshes) {
+SampleViews batch_views(const Batch& batch, const MultiviewSupervision& sup, const CaptureModel& model) {
   std::vector<std::vector<KeypointView>> views(batch.frames.size());
   for (size_t b = 0; b < batch.frames.size(); ++b)
     for (int v = 0; v < sup.views(); ++v)
       views[b].push_back({sup.camera(batch.frames[b], v), sup.detections(batch.frames[b], v)});
-  const SampleViews placed = sample_views(batch.cameras, views, model.keypoint_mask(), DType::F32);
+  return sample_views(batch.cameras, views, model.keypoint_mask(), DType::F32);
+}
+
+CapturePrediction predict_batch(CaptureNetworks& nets, const CaptureModel& model, const Batch& batch,
+                                const MultiviewSupervision& sup, Learning learning, bool deformation,
+                                bool with_meshes) {
+  const SampleViews placed = batch_views(batch, sup, model);
   auto run = [&](nn::ResNet& net, bool learns) {
     net.train(learns);
     if (learns) return net.forward(batch.images);

@@ -117,6 +117,9 @@ namespace weft::capture {
 // Which network learns in a forward pass (the other runs in evaluation mode, no graph).
 enum class Learning { none, pose, deformation };
 
+// The batch's input views and its frames' detections in every view, for predict().
+SampleViews batch_views(const Batch& batch, const MultiviewSupervision& supervision, const CaptureModel& model);
+
 // Both networks on a batch, placed in the world by the frames' detections in every view:
 // PoseNet always; PADefNet unless `deformation` is false (then the skinned template).
 // with_meshes: see CaptureModel::predict.

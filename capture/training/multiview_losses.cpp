@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include "capture/deformation/losses.h"
+#include "capture/render/renderer.h"
 #include "graph/error.h"
 #include "ops/geometry.h"
 #include "ops/ops.h"
@@ -13,21 +14,30 @@ namespace {
 
 // Every vertex at least a millimetre-ish in front of the camera (projection refuses
 // points behind it; a wild early prediction may put some there: that view is skipped).
-bool in_front(const Camera& camera, const Vertices& V, const std::vector<int>* rows = nullptr) {
-  const double min_depth = 1e-6;
-  if (rows) {
-    for (int i : *rows)
-      if (camera.depth(V.row(i).transpose()) <= min_depth) return false;
-    return true;
-  }
-  for (int i = 0; i < V.rows(); ++i)
-    if (camera.depth(V.row(i).transpose()) <= min_depth) return false;
-  return true;
-}
-
 Tensor batch_row(const Tensor& t, int64_t b) { return ops::slice(t, 0, b, b + 1); }
 
 }  // namespace
+
+bool in_front(const Camera& camera, const Vertices& V) {
+  for (int i = 0; i < V.rows(); ++i)
+    if (camera.depth(V.row(i).transpose()) <= 1e-6) return false;
+  return true;
+}
+
+double rendered_silhouette_iou(const Camera& camera, const Character& ch, const Vertices& body, const Vertices* cloth,
+                               const cv::Mat& mask) {
+  if (!in_front(camera, body)) return 0.0;
+  std::vector<RenderMesh> meshes(1);
+  meshes[0].mesh = &ch.body.mesh;
+  meshes[0].vertices = &body;
+  if (cloth) {
+    meshes.emplace_back();
+    meshes[1].mesh = &ch.cloth->mesh;
+    meshes[1].vertices = cloth;
+    meshes[1].part = 2;
+  }
+  return mask_iou(render(camera, meshes).mask, mask);
+}
 
 Vertices sample_vertices(const Tensor& vertices, int64_t b) {
   WEFT_CHECK(vertices.dim() == 3 && vertices.size(2) == 3 && b >= 0 && b < vertices.size(0),

@@ -10,6 +10,7 @@
 // (capture/deformation/losses.h).
 #include <vector>
 
+#include "capture/character/character.h"
 #include "capture/io/mesh.h"
 #include "capture/training/multiview_supervision.h"
 #include "graph/tensor.h"
@@ -32,5 +33,13 @@ Tensor multiview_silhouette_loss(const Tensor& vertices, const Faces& faces, con
 
 // A batch's vertices as plain Eigen (sample b of [B,V,3]).
 Vertices sample_vertices(const Tensor& vertices, int64_t b);
+
+// Every vertex in front of the camera (projection refuses points behind it).
+bool in_front(const Camera& camera, const Vertices& V);
+
+// IoU of the rendered body (and cloth, when given) against `mask` (the camera's size);
+// 0 when the body is not wholly in front of the camera.
+double rendered_silhouette_iou(const Camera& camera, const Character& character, const Vertices& body,
+                               const Vertices* cloth, const cv::Mat& mask);
 
 }  // namespace weft::capture

@@ -64,13 +64,21 @@ const Camera& MultiviewSupervision::silhouette_camera(int frame, int v) const {
 
 cv::Mat MultiviewSupervision::mask(int frame, int v) const {
   at(frame);
+  const std::pair<int, int> key{frame, v};
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = masks_.find(key);
+    if (it != masks_.end()) return it->second;
+  }
   const cv::Mat full = read_dataset_mask(info_, frame, info_.views.at(v));  // 0/255
   const int side = std::max(full.cols, full.rows);
   cv::Mat square(side, side, CV_32FC1, cv::Scalar(0));
   full.convertTo(square(cv::Rect(0, 0, full.cols, full.rows)), CV_32FC1, 1.0 / 255.0);
   cv::Mat small;
   cv::resize(square, small, cv::Size(size_, size_), 0, 0, size_ < side ? cv::INTER_AREA : cv::INTER_LINEAR);
-  return small >= 0.5f;  // CV_8UC1 0/255
+  const cv::Mat m = small >= 0.5f;  // CV_8UC1 0/255
+  std::lock_guard<std::mutex> lock(mutex_);
+  return masks_.emplace(key, m).first->second;
 }
 
 cv::Mat MultiviewSupervision::distance_transform(int frame, int v) const {

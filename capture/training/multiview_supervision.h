@@ -8,8 +8,8 @@
 // The distance transforms are of the mask padded to a square (side = max(width, height),
 // extra rows or columns background) and resized to size² pixels (INTER_AREA, then
 // thresholded at half coverage), so silhouette_camera() is the full camera mapped into
-// that square exactly as the dataset reader's crops are (crop_camera). Computed once per
-// (frame, view) and kept (size² floats each); thread-safe.
+// that square exactly as the dataset reader's crops are (crop_camera). Masks and distance
+// transforms are computed once per (frame, view) and kept (5 size² bytes); thread-safe.
 #include <opencv2/core.hpp>
 
 #include <map>
@@ -38,7 +38,7 @@ class MultiviewSupervision {
   // (CV_32FC1, distance in those pixels to the nearest foreground pixel).
   const Camera& silhouette_camera(int frame, int v) const;
   cv::Mat distance_transform(int frame, int v) const;
-  cv::Mat mask(int frame, int v) const;  // CV_8UC1 0/255 at size², not kept
+  cv::Mat mask(int frame, int v) const;  // CV_8UC1 0/255 at size²
 
  private:
   struct FrameData {
@@ -51,7 +51,7 @@ class MultiviewSupervision {
   int size_;
   std::map<int, FrameData> frames_;
   mutable std::mutex mutex_;
-  mutable std::map<std::pair<int, int>, cv::Mat> dt_;
+  mutable std::map<std::pair<int, int>, cv::Mat> masks_, dt_;
 };
 
 }  // namespace weft::capture

@@ -12,15 +12,14 @@
 
 #include "capture/character/skeletool_io.h"
 #include "capture/io/mesh_io.h"
-#include "capture/render/renderer.h"
 #include "capture/studio/garment_simulator.h"
+#include "capture/studio/garment_windows.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/multiview_losses.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
 #include "nn/safetensors.h"
-#include "physics/body_mesh.h"
 #include "physics/cloth_metrics.h"
 
 namespace weft::capture {
@@ -47,22 +46,6 @@ void load_networks(const std::string& path, CaptureNetworks& nets) {
 
 // Mean distance (character units) between corresponding rows.
 double mean_distance(const Vertices& a, const Vertices& b) { return (a - b).rowwise().norm().mean(); }
-
-double iou_in_view(const Camera& cam, const Character& ch, const Vertices& body, const Vertices* cloth,
-                   const cv::Mat& mask) {
-  for (int i = 0; i < body.rows(); ++i)
-    if (cam.depth(body.row(i).transpose()) <= 1e-6) return 0.0;
-  std::vector<RenderMesh> meshes(1);
-  meshes[0].mesh = &ch.body.mesh;
-  meshes[0].vertices = &body;
-  if (cloth) {
-    meshes.emplace_back();
-    meshes[1].mesh = &ch.cloth->mesh;
-    meshes[1].vertices = cloth;
-    meshes[1].part = 2;
-  }
-  return mask_iou(render(cam, meshes).mask, mask);
-}
 
 }  // namespace
 
@@ -103,9 +86,21 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   const double mpu = ch.metres_per_unit;
   const PoseParametrisation& param = model.parametrisation();
 
-  // Ground truth.
   const fs::path gt_dir = fs::path(data) / "gt";
   const Motion motion = read_motion((gt_dir / "pose.motion").string(), int(ch.rest_dofs.size()));
+  // The mean training pose (regressed dofs averaged, the root chain at rest).
+  Eigen::VectorXd mean_dofs = ch.rest_dofs;
+  if (info.splits.count("train") && !info.splits.at("train").empty()) {
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(ch.rest_dofs.size());
+    for (int f : info.splits.at("train")) sum += motion.dofs.row(f).transpose();
+    sum /= double(info.splits.at("train").size());
+    for (int dof : param.free_dofs) mean_dofs[dof] = sum[dof];
+  }
+  const Vertices mean_keypoints = pose_character(ch, mean_dofs).body25;
+
+  // Ground truth, and the floor: the mean pose given the true root rotation, placed like
+  // PoseNet's (the translation from the frame's detections).
+  Mean mean_kp, mean_joint_aligned;
   std::map<int, Vertices> gt_keypoints, gt_cloth, gt_body;
   Mean skinned_cloth_err;  // the template skinned by the true pose against the simulated garment
   Mean template_cloth_err;  // the template skinned by the predicted pose (PADefNet off)
@@ -123,24 +118,29 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
       gt_cloth[f] = read_ply((gt_dir / fmt::format("cloth_{:04d}.ply", f)).string()).V;
       skinned_cloth_err.add(mean_distance(posed.cloth, gt_cloth[f]) * ch.metres_per_unit * 1e3);
     }
+    Vertices oriented = (mean_keypoints.rowwise() - param.pivot.transpose()) * gt_rotation[f].transpose();
+    for (int m = 0; m < kBody25Count; ++m) {
+      if (!oriented.row(m).allFinite()) {
+        oriented.row(m).setZero();
+        continue;
+      }
+      if (model.keypoint_mask()[m] > 0)
+        mean_joint_aligned.add((oriented.row(m).transpose() - (posed.body25.row(m).transpose() - gt_pivot[f])).norm() *
+                               mpu * 1e3);
+    }
+    std::vector<std::vector<KeypointView>> kv(1);
+    for (int w = 0; w < V; ++w) kv[0].push_back({sup.camera(f, w), sup.detections(f, w)});
+    const RootTranslationTerms terms = root_translation_terms(kv, model.keypoint_mask(), DType::F64);
+    std::vector<double> flat(oriented.data(), oriented.data() + oriented.size());
+    const Tensor t_mean = solve_root_translation(terms, Tensor::from_data({1, kBody25Count, 3}, flat, DType::F64));
+    for (int m = 0; m < kBody25Count; ++m)
+      for (int a = 0; a < 3; ++a) flat[3 * m + a] += t_mean.data<double>()[a];
+    LandmarkStatistics mean_stats;
+    multiview_landmark_loss(Tensor::from_data({1, kBody25Count, 3}, flat, DType::F32), {f}, sup, model.keypoint_mask(),
+                            &mean_stats);
+    mean_kp.add(mean_stats.mean_error_px, mean_stats.detections);
   }
-  // The mean training pose (regressed dofs averaged, the root chain at rest).
-  Eigen::VectorXd mean_dofs = ch.rest_dofs;
-  if (info.splits.count("train") && !info.splits.at("train").empty()) {
-    Eigen::VectorXd sum = Eigen::VectorXd::Zero(ch.rest_dofs.size());
-    for (int f : info.splits.at("train")) sum += motion.dofs.row(f).transpose();
-    sum /= double(info.splits.at("train").size());
-    for (int dof : param.free_dofs) mean_dofs[dof] = sum[dof];
-  }
-  const Vertices mean_keypoints = pose_character(ch, mean_dofs).body25;
 
-  std::map<std::pair<int, int>, cv::Mat> masks;
-  for (int f : frames)
-    for (int v = 0; v < V; ++v) masks[{f, v}] = sup.mask(f, v);
-
-  std::vector<std::array<int, 3>> body_faces(ch.body.mesh.num_faces());
-  for (int i = 0; i < ch.body.mesh.num_faces(); ++i)
-    body_faces[i] = {ch.body.mesh.F(i, 0), ch.body.mesh.F(i, 1), ch.body.mesh.F(i, 2)};
   physics::SimulatorFactory simulator;
   if (ch.has_cloth() && !cfg.physics.synth_config.empty())
     simulator = garment_simulator_factory(ch, load_synth_config(cfg.physics.synth_config).simulation, info.fps);
@@ -150,7 +150,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.split = split;
   e.frames = int(frames.size());
   e.views = V;
-  Mean rotation_err, kp, mean_kp, joint, joint_aligned, mean_joint_aligned, iou, tmpl_iou, cloth_err, body_err, pen, inside, oob,
+  Mean rotation_err, kp, joint, joint_aligned, iou, tmpl_iou, cloth_err, body_err, pen, inside, oob,
       oob_rel;
   for (int v = 0; v < V; ++v) {
     std::map<int, physics::Positions> cloth_seq;
@@ -161,8 +161,13 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
                         [&](size_t i) { samples[i] = ds.load(frames[first + i], info.views[v]); });
       const Batch batch = make_batch(samples);
       NoGradGuard no_grad;
-      const CapturePrediction p = predict_batch(nets, model, batch, sup, Learning::none, true);
-      const CapturePrediction t = predict_batch(nets, model, batch, sup, Learning::none, false);
+      // One pass of each network: the prediction, and the same pose with PADefNet off.
+      const SampleViews views = batch_views(batch, sup, model);
+      nets.pose_net->eval();
+      nets.deformation_net->eval();
+      const Tensor pose_out = nets.pose_net->forward(batch.images);
+      const CapturePrediction p = model.predict(pose_out, nets.deformation_net->forward(batch.images), views);
+      const CapturePrediction t = model.predict(pose_out, Tensor(), views);
       LandmarkStatistics stats;
       multiview_landmark_loss(p.keypoints, batch.frames, sup, model.keypoint_mask(), &stats);
       kp.add(stats.mean_error_px, stats.detections);
@@ -172,22 +177,6 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         const Vertices K = sample_vertices(p.keypoints, b);
         const Eigen::RowVector3d t_pred(p.translation.data<float>()[3 * b], p.translation.data<float>()[3 * b + 1],
                                         p.translation.data<float>()[3 * b + 2]);
-        // The mean pose, oriented by the ground truth's root rotation, placed like PoseNet's.
-        const Vertices oriented = ((mean_keypoints.rowwise() - param.pivot.transpose()) * gt_rotation[f].transpose());
-        Vertices oriented_finite = oriented;
-        for (int m = 0; m < kBody25Count; ++m)
-          if (!oriented_finite.row(m).allFinite()) oriented_finite.row(m).setZero();
-        std::vector<std::vector<KeypointView>> kv(1);
-        for (int w = 0; w < V; ++w) kv[0].push_back({sup.camera(f, w), sup.detections(f, w)});
-        const RootTranslationTerms terms = root_translation_terms(kv, model.keypoint_mask(), DType::F64);
-        std::vector<double> flat(oriented_finite.data(), oriented_finite.data() + oriented_finite.size());
-        const Tensor placed_t = solve_root_translation(terms, Tensor::from_data({1, kBody25Count, 3}, flat, DType::F64));
-        const Eigen::RowVector3d t_mean(placed_t.data<double>()[0], placed_t.data<double>()[1], placed_t.data<double>()[2]);
-        const Vertices placed = oriented_finite.rowwise() + t_mean;
-        LandmarkStatistics mean_stats;
-        multiview_landmark_loss(Tensor::from_data({1, kBody25Count, 3}, std::vector<double>(placed.data(), placed.data() + placed.size()), DType::F32),
-                                {f}, sup, model.keypoint_mask(), &mean_stats);
-        mean_kp.add(mean_stats.mean_error_px, mean_stats.detections);
         const Vertices& G = gt_keypoints[f];
         Eigen::Matrix3d R_pred;
         for (int r = 0; r < 3; ++r)
@@ -202,7 +191,6 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
           // turn the body too), the posed skeleton is.
           const Eigen::Vector3d g_rel = G.row(m).transpose() - gt_pivot[f];
           joint_aligned.add(((K.row(m) - t_pred).transpose() - g_rel).norm() * mpu * 1e3);
-          mean_joint_aligned.add((R_gt * (mean_keypoints.row(m).transpose() - param.pivot) - g_rel).norm() * mpu * 1e3);
         }
         const Vertices body = sample_vertices(p.body, b), body_t = sample_vertices(t.body, b);
         body_err.add(mean_distance(body, gt_body[f]) * mpu * 1e3);
@@ -215,20 +203,17 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         std::vector<double> ious(V), tmpl(V);
         tbb::parallel_for(0, V, [&](int w) {
           const Camera& cam = sup.silhouette_camera(f, w);
-          ious[w] = iou_in_view(cam, ch, body, p.cloth.defined() ? &cloth : nullptr, masks.at({f, w}));
-          tmpl[w] = iou_in_view(cam, ch, body_t, p.cloth.defined() ? &cloth_t : nullptr, masks.at({f, w}));
+          ious[w] = rendered_silhouette_iou(cam, ch, body, p.cloth.defined() ? &cloth : nullptr, sup.mask(f, w));
+          tmpl[w] = rendered_silhouette_iou(cam, ch, body_t, p.cloth.defined() ? &cloth_t : nullptr, sup.mask(f, w));
         });
         for (int w = 0; w < V; ++w) iou.add(ious[w]), tmpl_iou.add(tmpl[w]);
         if (p.cloth.defined()) {
-          const physics::BodyMesh obstacle(Eigen::MatrixX3d(body * mpu), body_faces, ch.inactive_body_faces);
-          for (int i = 0; i < cloth.rows(); ++i) {
-            const physics::ClosestPoint c = obstacle.closest_point(cloth.row(i).transpose() * mpu);
-            const bool in = c.face >= 0 && c.distance < 0;
-            inside.add(in ? 1.0 : 0.0);
-            if (in) pen.add(-c.distance * 1e3), e.penetration_max_mm = std::max(e.penetration_max_mm, -c.distance * 1e3);
-          }
           cloth_seq[f] = to_positions(cloth, mpu);
           body_seq[f] = Eigen::MatrixX3d(body * mpu);
+          const Penetration in = body_penetration(body_obstacle(ch, body_seq[f]), cloth_seq[f]);
+          pen.sum += in.depth_sum * 1e3, pen.n += in.vertices_inside;
+          inside.sum += in.vertices_inside, inside.n += cloth.rows();
+          e.penetration_max_mm = std::max(e.penetration_max_mm, in.max_depth * 1e3);
         }
       }
     }

@@ -17,8 +17,8 @@
 #include "capture/io/atomic_file.h"
 #include "capture/io/portable_random.h"
 #include "capture/io/text_reader.h"
-#include "capture/render/renderer.h"
 #include "capture/studio/garment_simulator.h"
+#include "capture/studio/garment_windows.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/loss_log.h"
 #include "capture/training/multiview_losses.h"
@@ -29,7 +29,6 @@
 #include "nn/schedule.h"
 #include "ops/geometry.h"
 #include "ops/ops.h"
-#include "physics/body_mesh.h"
 #include "physics/simulation_window.h"
 
 namespace weft::capture {
@@ -366,9 +365,6 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   for (int i = 0; i < n; ++i) indices.push_back(int((int64_t(i) * split.size()) / n));
   double kp_sum = 0, joint_sum = 0, iou_sum = 0, pen_sum = 0;
   int kp_n = 0, joint_n = 0, iou_n = 0, pen_n = 0, cloth_n = 0;
-  std::vector<std::array<int, 3>> body_faces(character_.body.mesh.num_faces());
-  for (int i = 0; i < character_.body.mesh.num_faces(); ++i)
-    body_faces[i] = {character_.body.mesh.F(i, 0), character_.body.mesh.F(i, 1), character_.body.mesh.F(i, 2)};
   const double mpu = character_.metres_per_unit;
   for (int first = 0; first < n; first += 8) {
     std::vector<Sample> s(std::min(8, n - first));
@@ -392,31 +388,15 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
       if (p.cloth.defined()) cloth = sample_vertices(p.cloth, b);
       std::vector<double> ious(supervision_->views());
       tbb::parallel_for(0, supervision_->views(), [&](int v) {
-        std::vector<RenderMesh> meshes(1);
-        meshes[0].mesh = &character_.body.mesh;
-        meshes[0].vertices = &body;
-        if (p.cloth.defined()) {
-          meshes.emplace_back();
-          meshes[1].mesh = &character_.cloth->mesh;
-          meshes[1].vertices = &cloth;
-          meshes[1].part = 2;
-        }
-        const Camera& cam = supervision_->silhouette_camera(frame, v);
-        bool visible = true;
-        for (int i = 0; i < body.rows() && visible; ++i) visible = cam.depth(body.row(i).transpose()) > 1e-6;
-        ious[v] = visible ? mask_iou(render(cam, meshes).mask, supervision_->mask(frame, v)) : 0.0;
+        ious[v] = rendered_silhouette_iou(supervision_->silhouette_camera(frame, v), character_, body,
+                                          p.cloth.defined() ? &cloth : nullptr, supervision_->mask(frame, v));
       });
       for (double x : ious) iou_sum += x, ++iou_n;
       if (p.cloth.defined()) {
-        const physics::BodyMesh obstacle(Eigen::MatrixX3d(body * mpu), body_faces, character_.inactive_body_faces);
-        for (int i = 0; i < cloth.rows(); ++i) {
-          const physics::ClosestPoint c = obstacle.closest_point(cloth.row(i).transpose() * mpu);
-          ++cloth_n;
-          if (c.face >= 0 && c.distance < 0) {
-            pen_sum += -c.distance * 1000, ++pen_n;
-            rep.penetration_max_mm = std::max(rep.penetration_max_mm, -c.distance * 1000);
-          }
-        }
+        const Penetration pen =
+            body_penetration(body_obstacle(character_, Eigen::MatrixX3d(body * mpu)), to_positions(cloth, mpu));
+        pen_sum += pen.depth_sum * 1000, pen_n += pen.vertices_inside, cloth_n += cloth.rows();
+        rep.penetration_max_mm = std::max(rep.penetration_max_mm, pen.max_depth * 1000);
       }
     }
   }
