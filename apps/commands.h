@@ -14,5 +14,6 @@ void add_nn_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_synth_command(CLI::App& app);
 void add_train_command(CLI::App& app);
+void add_infer_command(CLI::App& app);
 
 }  // namespace weft::apps

@@ -397,19 +397,27 @@ Sample SyntheticDataset::load(int frame, const std::string& view) const {
 }
 
 Sample SyntheticDataset::load_at(int index, int frame, const std::string& view) const {
-  const int S = options_.input_size;
-  Sample s;
-  s.index = index;
-  s.frame = frame;
-  s.view = view;
-  s.camera = camera(frame, view);
-
   const cv::Mat bgr = read_png(dataset_image_path(info_, frame, view), cv::IMREAD_COLOR, CV_8UC3,
                                "an 8-bit BGR image", info_);
   const cv::Mat mask = read_dataset_mask(info_, frame, view);
   const Body25 keypoints = read_dataset_keypoints(dataset_keypoints_path(info_, frame, view));
+  Sample s = prepare_sample(bgr, mask, keypoints, camera(frame, view), options_);
+  s.index = index;
+  s.frame = frame;
+  s.view = view;
+  return s;
+}
 
-  s.crop = choose_crop(mask, keypoints, S, options_.margin);
+Sample prepare_sample(const cv::Mat& bgr, const cv::Mat& mask, const Body25& keypoints, const Camera& camera,
+                      const DatasetOptions& options) {
+  WEFT_CHECK(bgr.type() == CV_8UC3 && mask.type() == CV_8UC1 && bgr.size() == mask.size(),
+             "prepare_sample: expected an 8-bit BGR image and an 8-bit mask of one size");
+  WEFT_CHECK(bgr.cols == camera.width && bgr.rows == camera.height, "prepare_sample: a ", bgr.cols, "x", bgr.rows,
+             " image for camera '", camera.name, "' of ", camera.width, "x", camera.height);
+  const int S = options.input_size;
+  Sample s;
+  s.camera = camera;
+  s.crop = choose_crop(mask, keypoints, S, options.margin);
   s.crop_camera = crop_camera(s.camera, s.crop, S);
 
   // Image: to float before resizing, so only one rounding happens (the PNG's).
@@ -417,7 +425,7 @@ Sample SyntheticDataset::load_at(int index, int frame, const std::string& view) 
   cut_square(bgr, s.crop).convertTo(image, CV_32FC3, 1.0 / 255.0);
   image = resize_square(image, S);
   cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
-  if (options_.normalize) {
+  if (options.normalize) {
     for (int y = 0; y < S; ++y) {
       float* p = image.ptr<float>(y);
       for (int x = 0; x < S; ++x)

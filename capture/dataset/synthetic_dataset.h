@@ -139,6 +139,13 @@ struct Sample {
   Body25 keypoints = Body25::Zero();  // crop pixels, confidence unchanged
 };
 
+// A sample from one full image (CV_8UC3 BGR of the camera's size), its foreground mask
+// (CV_8UC1 0/255, same size) and its detections (full-image px; zeros when there are
+// none), cut and resized exactly as SyntheticDataset::load does: what `weft infer` feeds
+// the networks from a video frame. index, frame and view are left for the caller.
+Sample prepare_sample(const cv::Mat& bgr, const cv::Mat& mask, const Body25& keypoints, const Camera& camera,
+                      const DatasetOptions& options);
+
 class SyntheticDataset {
  public:
   // Reads dataset.yaml and cameras.yaml and checks that every frame and view of the split

@@ -15,6 +15,7 @@
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
 #include "capture/training/capture_networks.h"
+#include "capture/training/model_folder.h"
 #include "capture/training/multiview_losses.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
@@ -34,15 +35,6 @@ struct Mean {
   void add(double x, int64_t count = 1) { sum += x * count, n += count; }
   double value(double none = 0) const { return n ? sum / n : none; }
 };
-
-void load_networks(const std::string& path, CaptureNetworks& nets) {
-  const nn::SafetensorsFile f = nn::load_safetensors(path);
-  const auto it = f.metadata.find("weft.format");
-  if (it != f.metadata.end() && it->second == "training-checkpoint-1")
-    nn::load_checkpoint(path, nets, nullptr, nullptr);
-  else
-    nn::load_weights(path, nets);
-}
 
 // Mean distance (character units) between corresponding rows.
 double mean_distance(const Vertices& a, const Vertices& b) { return (a - b).rowwise().norm().mean(); }
@@ -73,7 +65,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   const Character ch = load_character(info.character);
   const CaptureModel model(ch, cfg.network);
   CaptureNetworks nets(ch, cfg.network, cfg.seed);
-  load_networks(weights, nets);
+  load_capture_networks(weights, nets);
   DatasetOptions d;
   d.split = split;
   d.input_size = cfg.network.input_size;

@@ -21,6 +21,7 @@
 #include "capture/studio/garment_windows.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/loss_log.h"
+#include "capture/training/model_folder.h"
 #include "capture/training/multiview_losses.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
@@ -52,29 +53,6 @@ struct PartTimes {
     t = now;
   }
 };
-
-
-std::string checkpoint_file(int64_t step) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "step_%07lld.safetensors", static_cast<long long>(step));
-  return buf;
-}
-
-// The run's checkpoints, oldest first.
-std::vector<std::pair<int64_t, fs::path>> list_checkpoints(const fs::path& dir) {
-  std::vector<std::pair<int64_t, fs::path>> out;
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) return out;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string n = e.path().filename().string();
-    long long step = 0;
-    char tail[32] = {0};
-    if (std::sscanf(n.c_str(), "step_%lld.%31s", &step, tail) == 2 && std::string(tail) == "safetensors")
-      out.emplace_back(step, e.path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
 
 bool all_finite(const nn::Module& m) {
   for (const nn::NamedTensor& p : m.named_parameters()) {
@@ -604,6 +582,7 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const T
   } else {
     write_text_atomically(saved.string(), text);
   }
+  write_model_folder(options.run, options.config, options.data);
   Trainer trainer(options, cfg);
   return trainer.run(progress);
 }

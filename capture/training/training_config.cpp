@@ -66,10 +66,10 @@ void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
 
 }  // namespace
 
-TrainingConfig parse_training_config(const std::string& text, const std::string& name) {
+TrainingConfig parse_training_config(const std::string& text, const std::string& name, const std::string& base_dir) {
   StrictYaml y;
   y.file = name;
-  y.dir = fs::path(name).parent_path();
+  y.dir = base_dir.empty() ? fs::path(name).parent_path() : fs::path(base_dir);
   const YAML::Node root = y.parse(text);
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",

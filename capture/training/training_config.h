@@ -72,6 +72,9 @@ struct TrainingConfig {
 };
 
 TrainingConfig load_training_config(const std::string& path);
-TrainingConfig parse_training_config(const std::string& yaml_text, const std::string& name);
+// name: the file's path for messages; relative paths resolve against base_dir, or name's
+// folder when empty.
+TrainingConfig parse_training_config(const std::string& yaml_text, const std::string& name,
+                                     const std::string& base_dir = "");
 
 }  // namespace weft::capture

@@ -1,0 +1,458 @@
+#include "capture/inference/sequence_capture.h"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <regex>
+
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/inference/capture_config.h"
+#include "capture/inference/frame_source.h"
+#include "capture/inference/green_screen.h"
+#include "capture/inference/root_placement.h"
+#include "capture/inference/temporal_filter.h"
+#include "capture/io/atomic_file.h"
+#include "capture/io/mesh_io.h"
+#include "capture/motion/skeleton_bvh.h"
+#include "capture/render/renderer.h"
+#include "capture/training/capture_networks.h"
+#include "capture/training/model_folder.h"
+#include "graph/autograd.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Seconds per part; lap() charges the time since the last lap to a part.
+struct PartClock {
+  std::map<std::string, double> seconds;
+  Clock::time_point t = Clock::now();
+  void lap(const std::string& part) {
+    const auto now = Clock::now();
+    seconds[part] += std::chrono::duration<double>(now - t).count();
+    t = now;
+  }
+};
+
+std::string four_digits(int id) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%04d", id);
+  return buf;
+}
+
+// The capture's camera: one for every frame, or one per frame named <name>_<id:04d>.
+class CaptureCameras {
+ public:
+  CaptureCameras(const std::string& file, const std::string& wanted) : file_(file) {
+    for (const Camera& c : read_cameras_yaml(file)) by_name_[c.name] = c;
+    WEFT_CHECK(!by_name_.empty(), file, ": no cameras");
+    const std::regex per_frame("(.+)_([0-9]{4,})");
+    std::map<std::string, int> families;
+    for (const auto& [n, c] : by_name_) {
+      std::smatch m;
+      if (std::regex_match(n, m, per_frame)) ++families[m[1].str()];
+    }
+    if (!wanted.empty()) {
+      name_ = wanted;
+      per_frame_ = !by_name_.count(wanted) && families.count(wanted);
+      WEFT_CHECK(by_name_.count(wanted) || per_frame_, file, ": no camera '", wanted, "' (nor per-frame cameras ",
+                 wanted, "_0000, …); the file has ", listing());
+    } else if (by_name_.size() == 1) {
+      name_ = by_name_.begin()->first;
+    } else if (families.size() == 1 && families.begin()->second == int(by_name_.size())) {
+      name_ = families.begin()->first;
+      per_frame_ = true;
+    } else {
+      fail(file, ": several cameras (", listing(), "); choose one with --camera-name");
+    }
+  }
+  const std::string& name() const { return name_; }
+  bool per_frame() const { return per_frame_; }
+  const Camera& at(int id) const {
+    const std::string n = per_frame_ ? name_ + "_" + four_digits(id) : name_;
+    const auto it = by_name_.find(n);
+    WEFT_CHECK(it != by_name_.end(), file_, ": no camera '", n, "' for frame ", id);
+    return it->second;
+  }
+
+ private:
+  std::string listing() const {
+    std::string s;
+    int k = 0;
+    for (const auto& [n, c] : by_name_) {
+      if (k++ == 6) return s + ", …";
+      s += (s.empty() ? "" : ", ") + n;
+    }
+    return s;
+  }
+  std::string file_, name_;
+  bool per_frame_ = false;
+  std::map<std::string, Camera> by_name_;
+};
+
+// What pass 1 keeps of a frame for pass 2.
+struct FrameRecord {
+  int id = 0;
+  std::string name;
+  Camera camera;
+  Body25 detections = Body25::Zero();
+  int mapped_detections = 0;  // detected keypoints the character maps
+  cv::Rect box;               // the mask's bounding box (empty: no foreground)
+};
+
+cv::Mat read_mask(const std::string& path, const cv::Size& size) {
+  const cv::Mat m = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  WEFT_CHECK(!m.empty(), path, ": cannot be read as a mask image");
+  WEFT_CHECK(m.size() == size, path, ": mask of ", m.cols, "x", m.rows, ", expected the frame's ", size.width, "x",
+             size.height);
+  cv::Mat out;
+  cv::threshold(m, out, 127, 255, cv::THRESH_BINARY);
+  return out;
+}
+
+// The root translation that makes the projection of `relative` (the body placed with
+// translation 0) cover the mask's box: the depth scales its projected height to the box's,
+// then the projection's box centre moves onto the box's; a few fixed-point rounds absorb
+// perspective and lens distortion.
+Eigen::Vector3d translation_from_silhouette(const Camera& cam, const Vertices& relative, const cv::Rect& box) {
+  const Eigen::Vector3d centroid = relative.colwise().mean().transpose();
+  const int stride = std::max<int>(1, int(relative.rows()) / 2000);
+  Vertices sample(relative.rows() / stride, 3);
+  for (Eigen::Index i = 0; i < sample.rows(); ++i) sample.row(i) = relative.row(i * stride);
+  // Start: the centroid on the ray through the box centre, at the depth where the body's
+  // vertical extent (camera y) spans the box's height.
+  Eigen::VectorXd ys = ((cam.R * sample.transpose()).row(1)).transpose();
+  const double height = std::max(1e-9, ys.maxCoeff() - ys.minCoeff());
+  const double depth = cam.K(1, 1) * height / std::max(1, box.height);
+  const Eigen::Vector3d ray = cam.K.inverse() * Eigen::Vector3d(box.x + 0.5 * (box.width - 1), box.y + 0.5 * (box.height - 1), 1);
+  Eigen::Vector3d q = ray * depth;  // camera coordinates of the centroid
+  for (int round = 0; round < 6; ++round) {
+    const Eigen::Vector3d t = cam.R.transpose() * (q - cam.t) - centroid;
+    const Points2 uv = project_points(cam, Vertices(sample.rowwise() + t.transpose()));
+    const double u0 = uv.col(0).minCoeff(), u1 = uv.col(0).maxCoeff(), v0 = uv.col(1).minCoeff(),
+                 v1 = uv.col(1).maxCoeff();
+    const double ratio = std::max(1e-9, v1 - v0 + 1) / std::max(1, box.height);
+    q *= ratio;  // about the camera centre: the projection scales about the principal point
+    const double du = (box.x + 0.5 * (box.width - 1)) - (cam.K(0, 2) + (0.5 * (u0 + u1) - cam.K(0, 2)) / ratio);
+    const double dv = (box.y + 0.5 * (box.height - 1)) - (cam.K(1, 2) + (0.5 * (v0 + v1) - cam.K(1, 2)) / ratio);
+    q.x() += du * q.z() / cam.K(0, 0);
+    q.y() += dv * q.z() / cam.K(1, 1);
+  }
+  return cam.R.transpose() * (q - cam.t) - centroid;
+}
+
+Vertices rows_of(const Tensor& t, int64_t b) {  // [B,V,3] → V×3 of sample b
+  const int64_t V = t.size(1);
+  const Tensor f = t.to(DType::F64);
+  const double* p = f.data<double>() + b * V * 3;
+  return Eigen::Map<const Vertices>(p, V, 3);
+}
+
+void write_png(const std::string& path, const cv::Mat& image) {
+  std::vector<uchar> bytes;
+  WEFT_CHECK(cv::imencode(".png", image, bytes), path, ": PNG encoding failed");
+  write_bytes_atomically(path, bytes.data(), bytes.size());
+}
+
+class OverlayVideo {
+ public:
+  OverlayVideo(const fs::path& out, double fps) : out_(out), fps_(fps) {}
+  void add(const cv::Mat& frame) {
+    if (failed_) return;
+    if (!writer_.isOpened()) {
+      size_ = frame.size();
+      for (const auto& [ext, fourcc] : {std::pair<const char*, int>{".mp4", cv::VideoWriter::fourcc('m', 'p', '4', 'v')},
+                                        {".avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}}) {
+        ext_ = ext;
+        if (writer_.open(partial().string(), fourcc, fps_, size_)) break;
+      }
+      if (!writer_.isOpened()) {
+        spdlog::warn("no video encoder available (MP4 or MJPG): the overlays stay PNG only");
+        failed_ = true;
+        return;
+      }
+    }
+    if (frame.size() == size_) {
+      writer_.write(frame);
+    } else {
+      cv::Mat resized;
+      cv::resize(frame, resized, size_);
+      writer_.write(resized);
+    }
+  }
+  // The finished file ("" when none was written).
+  std::string finish() {
+    if (!writer_.isOpened()) return "";
+    writer_.release();
+    const fs::path final_path = out_ / ("overlay" + ext_);
+    fs::rename(partial(), final_path);
+    return final_path.string();
+  }
+  ~OverlayVideo() {
+    if (writer_.isOpened()) {
+      writer_.release();
+      std::error_code ec;
+      fs::remove(partial(), ec);
+    }
+  }
+
+ private:
+  fs::path partial() const { return out_ / ("overlay.partial" + ext_); }
+  fs::path out_;
+  double fps_;
+  cv::VideoWriter writer_;
+  cv::Size size_;
+  std::string ext_;
+  bool failed_ = false;
+};
+
+}  // namespace
+
+CaptureSummary capture_sequence(const CaptureOptions& o,
+                                const std::function<void(const std::string&, int, int)>& progress) {
+  const auto t0 = Clock::now();
+  PartClock clock;
+  const ModelFolder model = read_model_folder(o.model);
+  const CaptureConfig cfg = o.config.empty() ? CaptureConfig{} : load_capture_config(o.config);
+  const Character character = load_character(model.character);
+  CaptureNetworks nets(character, model.config.network, model.config.seed);
+  load_capture_networks(model.weights, nets);
+  nets.pose_net->train(false);
+  nets.deformation_net->train(false);
+  const CaptureModel capture_model(character, model.config.network);
+  const CaptureCameras cameras(o.camera, o.camera_name);
+  FrameSource source(o.input);
+  const FrameFiles masks = o.masks.empty() ? FrameFiles() : FrameFiles(o.masks, ".png");
+  const FrameFiles detections = o.keypoints.empty() ? FrameFiles() : FrameFiles(o.keypoints, "_keypoints.json");
+  WEFT_CHECK(!o.out.empty(), "weft infer: no output folder");
+  const fs::path out(o.out);
+  fs::create_directories(out / "meshes");
+  if (cfg.overlays) fs::create_directories(out / "overlays");
+  const double fps = o.fps > 0 ? o.fps : source.fps() > 0 ? source.fps() : 30.0;
+  spdlog::info("model {} ({} at {}², weights {}); character {}: {} body + {} cloth vertices", o.model,
+               model.config.network.backbone, model.config.network.input_size, model.weights, character.name,
+               character.body.mesh.num_vertices(), character.has_cloth() ? character.cloth->mesh.num_vertices() : 0);
+  spdlog::info("input {} ({} frames{}); camera {}{}; masks: {}; keypoints: {}", o.input, source.size(),
+               source.is_video() ? fmt::format(", {:.3g} fps", source.fps()) : std::string(), cameras.name(),
+               cameras.per_frame() ? " (one per frame)" : "", o.masks.empty() ? "green-screen keying" : o.masks,
+               o.keypoints.empty() ? "none (translation from the silhouette)" : o.keypoints);
+  clock.lap("load");
+
+  // Pass 1: crops and both networks, batched.
+  DatasetOptions crop_options;
+  crop_options.input_size = model.config.network.input_size;
+  crop_options.margin = model.config.network.margin;
+  std::vector<FrameRecord> frames;
+  std::vector<Eigen::VectorXd> pose_rows, deformation_rows;
+  const std::vector<double>& keypoint_mask = capture_model.keypoint_mask();
+  const int total = o.max_frames >= 0 ? std::min(o.max_frames, source.size()) : source.size();
+  bool more = true;
+  while (more) {
+    std::vector<Sample> samples;
+    while (int(samples.size()) < cfg.batch_size) {
+      if (o.max_frames >= 0 && int(frames.size()) >= o.max_frames) { more = false; break; }
+      InputFrame f;
+      if (!source.next(f)) { more = false; break; }
+      clock.lap("read");
+      FrameRecord r;
+      r.id = f.id;
+      r.name = f.name;
+      r.camera = cameras.at(f.id);
+      WEFT_CHECK(f.bgr.cols == r.camera.width && f.bgr.rows == r.camera.height, o.camera, ": camera '",
+                 r.camera.name, "' is for ", r.camera.width, "x", r.camera.height, " images, but frame ", f.name,
+                 " of ", o.input, " is ", f.bgr.cols, "x", f.bgr.rows);
+      cv::Mat mask;
+      if (!masks.empty()) {
+        const std::string path = masks.find(f);
+        WEFT_CHECK(!path.empty(), o.masks, ": no mask for frame ", f.name, " (expected ", f.name, ".png)");
+        mask = read_mask(path, f.bgr.size());
+      } else {
+        mask = key_green_screen(f.bgr, cfg.keying);
+      }
+      r.box = cv::boundingRect(mask);
+      clock.lap("segment");
+      if (!detections.empty()) {
+        const std::string path = detections.find(f);
+        if (!path.empty()) r.detections = read_dataset_keypoints(path);
+        for (int k = 0; k < kBody25Count; ++k) r.mapped_detections += r.detections(k, 2) > 0 && keypoint_mask[size_t(k)] > 0;
+      }
+      samples.push_back(prepare_sample(f.bgr, mask, r.detections, r.camera, crop_options));
+      frames.push_back(r);
+      clock.lap("crop");
+      if (progress) progress("networks", int(frames.size()), std::max(total, int(frames.size())));
+    }
+    if (samples.empty()) break;
+    const Batch batch = make_batch(samples);
+    NoGradGuard no_grad;
+    const Tensor pose = nets.pose_net->forward(batch.images).to(DType::F64);
+    const Tensor deformation = nets.deformation_net->forward(batch.images).to(DType::F64);
+    for (int b = 0; b < batch.size(); ++b) {
+      pose_rows.push_back(Eigen::Map<const Eigen::VectorXd>(pose.data<double>() + b * pose.size(1), pose.size(1)));
+      deformation_rows.push_back(
+          Eigen::Map<const Eigen::VectorXd>(deformation.data<double>() + b * deformation.size(1), deformation.size(1)));
+    }
+    clock.lap("networks");
+  }
+  const int n = int(frames.size());
+  WEFT_CHECK(n > 0, o.input, ": no frames read");
+
+  // The temporal filter on the network outputs.
+  std::vector<int> ids;
+  for (const FrameRecord& r : frames) ids.push_back(r.id);
+  auto stack = [](const std::vector<Eigen::VectorXd>& rows) {
+    Eigen::MatrixXd m(Eigen::Index(rows.size()), rows[0].size());
+    for (size_t i = 0; i < rows.size(); ++i) m.row(Eigen::Index(i)) = rows[i].transpose();
+    return m;
+  };
+  const Eigen::MatrixXd pose_filtered =
+      gaussian_filter_frames(stack(pose_rows), ids, cfg.filter_sigma_frames, cfg.filter_radius_frames);
+  const Eigen::MatrixXd deformation_filtered =
+      gaussian_filter_frames(stack(deformation_rows), ids, cfg.filter_sigma_frames, cfg.filter_radius_frames);
+  clock.lap("filter");
+
+  // Pass 2: the deformation layer, placement and files.
+  source.rewind();
+  CaptureSummary summary;
+  summary.frames = n;
+  const RootPlacement placement(character);
+  const PoseParametrisation& param = capture_model.parametrisation();
+  Motion motion;
+  motion.dofs.resize(n, character.skeleton.num_dofs());
+  std::vector<Transforms> globals;
+  nlohmann::json frame_list = nlohmann::json::array();
+  OverlayVideo video(out, fps);
+  RenderOptions render_options;
+  TriangleMesh body_mesh = character.body.mesh, cloth_mesh = character.has_cloth() ? character.cloth->mesh : TriangleMesh();
+  body_mesh.colors.resize(0, 3);
+  cloth_mesh.colors.resize(0, 3);
+  int written = 0;
+  for (int start = 0; start < n; start += cfg.batch_size) {
+    const int B = std::min(cfg.batch_size, n - start);
+    std::vector<double> pose_values, deformation_values;
+    std::vector<Eigen::Matrix3d> rotations;
+    std::vector<std::vector<KeypointView>> views(static_cast<size_t>(B));
+    for (int b = 0; b < B; ++b) {
+      const FrameRecord& r = frames[size_t(start + b)];
+      for (Eigen::Index k = 0; k < pose_filtered.cols(); ++k) pose_values.push_back(pose_filtered(start + b, k));
+      for (Eigen::Index k = 0; k < deformation_filtered.cols(); ++k)
+        deformation_values.push_back(deformation_filtered(start + b, k));
+      rotations.push_back(r.camera.R);
+      if (r.mapped_detections >= 2) views[size_t(b)].push_back({r.camera, r.detections});
+    }
+    SampleViews placed;
+    placed.input_rotations = rotations;
+    placed.translation = root_translation_terms(views, keypoint_mask, DType::F32);
+    const Tensor pose = Tensor::from_data({B, pose_filtered.cols()}, pose_values, DType::F32);
+    const Tensor deformation = Tensor::from_data({B, deformation_filtered.cols()}, deformation_values, DType::F32);
+    CapturePrediction p;
+    {
+      NoGradGuard no_grad;
+      p = capture_model.predict(pose, deformation, placed, true);
+    }
+    const Tensor dofs = p.dofs.to(DType::F64), R = p.rotation.to(DType::F64),
+                 t = p.translation.to(DType::F64);
+    clock.lap("deform");
+    for (int b = 0; b < B; ++b) {
+      const FrameRecord& r = frames[size_t(start + b)];
+      Vertices body = rows_of(p.body, b);
+      Vertices cloth = character.has_cloth() ? rows_of(p.cloth, b) : Vertices();
+      Eigen::Vector3d translation = Eigen::Map<const Eigen::Vector3d>(t.data<double>() + 3 * b);
+      const bool from_keypoints = r.mapped_detections >= 2;
+      if (!from_keypoints && !r.box.empty()) {
+        // No rays constrained the solve: the translation is 0; place it by the silhouette.
+        const Eigen::Vector3d shift = translation_from_silhouette(r.camera, body, r.box) ;
+        body.rowwise() += shift.transpose();
+        if (cloth.rows()) cloth.rowwise() += shift.transpose();
+        translation += shift;
+      }
+      ++(from_keypoints ? summary.translations_from_keypoints : summary.translations_from_silhouette);
+      Eigen::Matrix3d rotation;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) rotation(i, j) = R.data<double>()[b * 9 + i * 3 + j];
+      const Eigen::VectorXd rest_root = Eigen::Map<const Eigen::VectorXd>(dofs.data<double>() + b * dofs.size(1), dofs.size(1));
+      const int i = start + b;
+      Eigen::VectorXd previous;
+      if (i > 0) previous = motion.dofs.row(i - 1).transpose();
+      double residual = 0;
+      motion.dofs.row(i) = placement.place(rest_root, rotation, translation, i > 0 ? &previous : nullptr, &residual).transpose();
+      if (residual > 1e-6) spdlog::warn("frame {}: the root chain reproduces the placement only to {:.2g}", r.name, residual);
+      motion.frame_ids.push_back(r.id);
+      globals.push_back(forward_kinematics(character.skeleton, motion.dofs.row(i).transpose()));
+      clock.lap("place");
+
+      const std::string id = four_digits(r.id);
+      body_mesh.V = body;
+      if (cloth.rows()) cloth_mesh.V = cloth;
+      for (const std::string& format : cfg.mesh_formats) {
+        write_mesh((out / "meshes" / ("body_" + id + "." + format)).string(), body_mesh);
+        if (cloth.rows()) write_mesh((out / "meshes" / ("cloth_" + id + "." + format)).string(), cloth_mesh);
+      }
+      if (cfg.overlays || cfg.video) {
+        InputFrame f;
+        WEFT_CHECK(source.next(f) && f.id == r.id, o.input, ": frame ", r.name, " could not be read again");
+        std::vector<RenderMesh> meshes = {{&character.body.mesh, &body, 1}};
+        meshes[0].color = cv::Scalar(200, 170, 140);
+        if (cloth.rows()) {
+          meshes.push_back({&character.cloth->mesh, &cloth, 2});
+          meshes[1].color = cv::Scalar(60, 120, 230);
+        }
+        const RenderResult drawn = render(r.camera, meshes, render_options);
+        cv::Mat overlay = f.bgr.clone();
+        cv::Mat blended;
+        cv::addWeighted(drawn.rgb, cfg.overlay_alpha, f.bgr, 1 - cfg.overlay_alpha, 0, blended);
+        blended.copyTo(overlay, drawn.mask);
+        if (cfg.overlays) write_png((out / "overlays" / (id + ".png")).string(), overlay);
+        if (cfg.video) video.add(overlay);
+      }
+      frame_list.push_back({{"id", r.id},
+                            {"source", r.name},
+                            {"pivot", {translation.x(), translation.y(), translation.z()}},
+                            {"translation_from", from_keypoints ? "keypoints" : r.box.empty() ? "none" : "silhouette"}});
+      clock.lap("write");
+      if (progress) progress("meshes", ++written, n);
+    }
+  }
+  (void)param;
+  write_motion((out / "pose.motion").string(), motion);
+  write_bvh((out / "pose.bvh").string(), skeleton_motion_bvh(character.skeleton, globals, 1.0 / fps));
+  const std::string video_path = video.finish();
+  clock.lap("write");
+
+  summary.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  summary.part_seconds = clock.seconds;
+  nlohmann::json j;
+  j["format"] = "weft-capture/1";
+  j["model"] = fs::absolute(o.model).lexically_normal().string();
+  j["weights"] = fs::absolute(model.weights).lexically_normal().string();
+  j["character"] = fs::absolute(model.character).lexically_normal().string();
+  j["metres_per_unit"] = character.metres_per_unit;
+  j["synth_config"] = model.synth_config;
+  j["input"] = fs::absolute(o.input).lexically_normal().string();
+  j["camera"] = fs::absolute(o.camera).lexically_normal().string();
+  j["view"] = cameras.name();
+  j["masks"] = o.masks;
+  j["keypoints"] = o.keypoints;
+  j["fps"] = fps;
+  j["filter"] = {{"sigma_frames", cfg.filter_sigma_frames}, {"radius_frames", cfg.filter_radius_frames}};
+  j["collisions_resolved"] = false;
+  j["video"] = video_path.empty() ? "" : fs::path(video_path).filename().string();
+  j["frames"] = frame_list;
+  j["timing"] = {{"seconds", summary.seconds}, {"frames_per_second", summary.fps()}, {"parts", clock.seconds}};
+  write_text_atomically((out / "capture.json").string(), j.dump(1) + "\n");
+  return summary;
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,120 @@
+#include "capture/training/model_folder.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <system_error>
+
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/io/atomic_file.h"
+#include "capture/io/strict_yaml.h"
+#include "capture/io/text_reader.h"
+#include "graph/error.h"
+#include "nn/checkpoint.h"
+#include "nn/safetensors.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+std::string checkpoint_file(int64_t step) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "step_%07lld.safetensors", static_cast<long long>(step));
+  return buf;
+}
+
+std::vector<std::pair<int64_t, fs::path>> list_checkpoints(const fs::path& dir) {
+  std::vector<std::pair<int64_t, fs::path>> out;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string n = e.path().filename().string();
+    long long step = 0;
+    char tail[32] = {0};
+    if (std::sscanf(n.c_str(), "step_%lld.%31s", &step, tail) == 2 && std::string(tail) == "safetensors")
+      out.emplace_back(step, e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void load_capture_networks(const std::string& path, CaptureNetworks& nets) {
+  const nn::SafetensorsFile f = nn::load_safetensors(path);
+  const auto it = f.metadata.find("weft.format");
+  if (it != f.metadata.end() && it->second == "training-checkpoint-1")
+    nn::load_checkpoint(path, nets, nullptr, nullptr);
+  else
+    nn::load_weights(path, nets);
+}
+
+void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir) {
+  const DatasetInfo info = read_dataset_info(data_dir);
+  const TrainingConfig cfg = load_training_config(config_path);
+  const fs::path dir(run);
+  // The character: a fresh copy next to the old one, then swapped in, so an interrupted
+  // copy never leaves a half-written character/.
+  const fs::path source = fs::path(info.character).parent_path();
+  const fs::path target = dir / "character", staging = dir / "character.partial";
+  fs::remove_all(staging);
+  fs::copy(source, staging, fs::copy_options::recursive);
+  fs::remove_all(target);
+  fs::rename(staging, target);
+
+  YAML::Emitter y;
+  y << YAML::BeginMap;
+  y << YAML::Key << "format" << YAML::Value << "weft-model/1";
+  y << YAML::Key << "config" << YAML::Value << "config.yaml";
+  y << YAML::Key << "config_dir" << YAML::Value << fs::absolute(config_path).parent_path().lexically_normal().string();
+  y << YAML::Key << "data" << YAML::Value << fs::absolute(data_dir).lexically_normal().string();
+  y << YAML::Key << "character" << YAML::Value
+    << ("character/" + fs::path(info.character).filename().string());
+  if (!cfg.physics.synth_config.empty())
+    y << YAML::Key << "synth_config" << YAML::Value
+      << fs::absolute(cfg.physics.synth_config).lexically_normal().string();
+  y << YAML::EndMap;
+  write_text_atomically((dir / "model.yaml").string(),
+                        "# What `weft infer`, `weft adapt` and `weft eval` need to use this model "
+                        "(capture/training/model_folder.h).\n" +
+                            std::string(y.c_str()) + "\n");
+}
+
+ModelFolder read_model_folder(const std::string& run) {
+  const fs::path dir(run);
+  WEFT_CHECK(fs::is_directory(dir), run, ": model folder not found (the --out folder of `weft train`)");
+  const fs::path file = dir / "model.yaml";
+  WEFT_CHECK(fs::exists(file), run,
+             ": no model.yaml; a model folder is the --out folder of `weft train` (runs started before "
+             "model folders existed get one by `weft train --resume` with their config and data)");
+  StrictYaml y;
+  y.file = file.string();
+  y.dir = dir;
+  const YAML::Node root = y.parse(read_file_bytes(file.string()));
+  if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping");
+  y.check_keys(root, "", {"format", "config", "config_dir", "data", "character", "synth_config"});
+  for (const char* key : {"format", "config", "config_dir", "character"})
+    if (!root[key]) y.fail_at(root, key, "missing");
+  const std::string format = y.get<std::string>(root["format"], "format", "a string");
+  if (format != "weft-model/1") y.fail_at(root["format"], "format", "expected weft-model/1, found " + format);
+
+  ModelFolder m;
+  m.dir = run;
+  const std::string config = y.path(root["config"], "config");
+  const std::string config_dir = y.get<std::string>(root["config_dir"], "config_dir", "a folder");
+  m.config = parse_training_config(read_file_bytes(config), config, config_dir);
+  m.character = y.path(root["character"], "character");
+  if (root["data"]) m.data = y.get<std::string>(root["data"], "data", "a folder");
+  if (root["synth_config"]) m.synth_config = y.path(root["synth_config"], "synth_config");
+
+  if (fs::exists(dir / "model.safetensors")) {
+    m.weights = (dir / "model.safetensors").string();
+  } else {
+    const auto all = list_checkpoints(dir / "checkpoints");
+    WEFT_CHECK(!all.empty(), run,
+               ": no model.safetensors and no checkpoints/step_*.safetensors: training has not saved any weights yet");
+    m.weights = all.back().second.string();
+  }
+  return m;
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,54 @@
+#pragma once
+// A trained model as other commands use it: the run folder `weft train` writes
+// (docs/TRAINING.md) is also the model folder `weft infer`, `weft adapt` and `weft eval`
+// read. Besides the training files it holds, written when a run starts:
+//   model.yaml            what follows, so the folder is usable without the dataset
+//   character/            a copy of the dataset's character folder
+// model.yaml:
+//   format: weft-model/1
+//   config: config.yaml            # the training config as given (a byte copy)
+//   config_dir: /abs/configs/train # where it came from: its relative paths resolve there
+//   data: /abs/data/training_set   # the dataset it trained on
+//   character: character/character.yaml
+//   synth_config: /abs/...yaml     # physics.synth_config resolved (absent: none); the
+//                                  # cloth material of the simulation loss, the collision
+//                                  # pass and the out-of-balance force
+// The weights are model.safetensors once training finished, else the last checkpoint.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "capture/training/capture_networks.h"
+#include "capture/training/training_config.h"
+
+namespace weft::capture {
+
+struct ModelFolder {
+  std::string dir;
+  TrainingConfig config;
+  std::string character;     // path of character.yaml (in the folder)
+  std::string data;          // the training dataset (may no longer exist)
+  std::string synth_config;  // "" when the config names none
+  std::string weights;       // model.safetensors or the last checkpoint
+};
+
+// Writes RUN/model.yaml and RUN/character/ for a run of `config_path` on `data_dir`
+// (atomically; an existing character/ is replaced by the dataset's).
+void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir);
+
+// Reads a model folder; errors name the folder and what is missing (no model.yaml: a run
+// of a weft before model folders, or not a run; no weights: training has not written a
+// checkpoint yet).
+ModelFolder read_model_folder(const std::string& run);
+
+// Loads both networks from model.safetensors or a training checkpoint (which also holds
+// the optimiser's state: left out).
+void load_capture_networks(const std::string& weights, CaptureNetworks& networks);
+
+// The checkpoints of RUN/checkpoints (step_NNNNNNN.safetensors), oldest first.
+std::vector<std::pair<int64_t, std::filesystem::path>> list_checkpoints(const std::filesystem::path& dir);
+std::string checkpoint_file(int64_t step);
+
+}  // namespace weft::capture
