@@ -96,7 +96,10 @@ FrameFiles::FrameFiles(const std::string& dir, const std::string& suffix) : dir_
     by_name_[key] = e.path().string();
     size_t digits = key.size();
     while (digits > 0 && std::isdigit(static_cast<unsigned char>(key[digits - 1]))) --digits;
-    if (digits < key.size() && key.size() - digits < 10) by_number_[std::stoi(key.substr(digits))] = e.path().string();
+    if (digits < key.size() && key.size() - digits <= 15) {  // OpenPose pads video frame numbers to 12 digits
+      const long long number = std::stoll(key.substr(digits));
+      if (number <= 2147483647LL) by_number_[int(number)] = e.path().string();
+    }
   }
   WEFT_CHECK(!by_name_.empty(), dir, ": no files ending in ", suffix);
 }
