@@ -49,7 +49,8 @@ FrameSource::FrameSource(const std::string& path) : path_(path) {
     return;
   }
   video_ = true;
-  capture_.open(path);
+  // FFmpeg first (it reads every common container); then whatever backend OpenCV has.
+  if (!capture_.open(path, cv::CAP_FFMPEG)) capture_.open(path, cv::CAP_ANY);
   WEFT_CHECK(capture_.isOpened(), path, ": cannot be opened as a video (OpenCV's video backends do not read it)");
   size_ = std::max(0, int(capture_.get(cv::CAP_PROP_FRAME_COUNT)));
   fps_ = capture_.get(cv::CAP_PROP_FPS);
@@ -81,7 +82,7 @@ void FrameSource::rewind() {
   next_ = 0;
   if (video_) {
     capture_.release();
-    capture_.open(path_);
+    if (!capture_.open(path_, cv::CAP_FFMPEG)) capture_.open(path_, cv::CAP_ANY);
     WEFT_CHECK(capture_.isOpened(), path_, ": cannot be opened again as a video");
   }
 }

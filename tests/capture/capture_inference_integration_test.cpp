@@ -1,0 +1,207 @@
+// `weft infer` (capture/inference/sequence_capture.h) on a view of the tiny dataset with a
+// model folder holding untrained networks (PoseNet's last layer given a random bias, so
+// the pose and root rotation are far from the rest pose; PADefNet zero, so the meshes are
+// the skinned template): every file is written, pose.motion and pose.bvh put the
+// skeleton exactly where the meshes are, the silhouette places a body where it was
+// rendered, and bad inputs stop with an error naming the file before capture.json exists.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+
+#include "capture/character/skeletool_io.h"
+#include "capture/inference/sequence_capture.h"
+#include "capture/inference/silhouette_translation.h"
+#include "capture/io/mesh_io.h"
+#include "capture/motion/bvh.h"
+#include "capture/render/renderer.h"
+#include "capture/studio/synthetic_studio.h"
+#include "capture/training/capture_networks.h"
+#include "capture/training/model_folder.h"
+#include "nn/checkpoint.h"
+#include "tests/capture/test_files.h"
+
+using namespace weft::capture;
+namespace fs = std::filesystem;
+using weft::capture::testing::expect_error;
+using weft::capture::testing::repo_file;
+
+namespace {
+
+fs::path scratch_root() { return fs::temp_directory_path() / ("weft_infer_test_" + std::to_string(::getpid())); }
+
+struct Fixture {
+  fs::path data, model;
+};
+
+const Fixture& fixture() {
+  static std::unique_ptr<Fixture> f;
+  if (!f) {
+    f = std::make_unique<Fixture>();
+    const fs::path root = scratch_root();
+    fs::remove_all(root);
+    fs::create_directories(root);
+    f->data = root / "tiny";
+    synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), f->data.string());
+    f->model = root / "model";
+    fs::create_directories(f->model);
+    const std::string config = repo_file("configs/train/tiny.yaml");
+    fs::copy_file(config, f->model / "config.yaml");
+    write_model_folder(f->model.string(), config, f->data.string());
+    const TrainingConfig cfg = load_training_config(config);
+    const Character character = load_character((f->model / "character" / "character.yaml").string());
+    CaptureNetworks nets(character, cfg.network, cfg.seed);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    weft::Tensor& bias = nets.pose_net->fc->bias;
+    for (int64_t k = 0; k < bias.numel(); ++k) bias.set({k}, u(rng));
+    weft::nn::save_weights((f->model / "model.safetensors").string(), nets);
+    static struct Cleanup {
+      ~Cleanup() {
+        std::error_code ec;
+        fs::remove_all(scratch_root(), ec);
+      }
+    } cleanup;
+  }
+  return *f;
+}
+
+}  // namespace
+
+TEST(Infer, WritesEveryFileAndThePoseFilesPutTheSkeletonWhereTheMeshesAre) {
+  const Fixture& f = fixture();
+  CaptureOptions o;
+  o.model = f.model.string();
+  o.input = (f.data / "images" / "cam02").string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = "cam02";
+  o.keypoints = (f.data / "keypoints" / "cam02").string();
+  o.out = (scratch_root() / "capture").string();
+  int networks_calls = 0, mesh_calls = 0;
+  const CaptureSummary s = capture_sequence(o, [&](const std::string& pass, int, int total) {
+    EXPECT_EQ(total, 6);
+    ++(pass == "networks" ? networks_calls : mesh_calls);
+  });
+  EXPECT_EQ(s.frames, 6);
+  EXPECT_EQ(s.translations_from_keypoints, 6);
+  EXPECT_EQ(networks_calls, 6);
+  EXPECT_EQ(mesh_calls, 6);
+  for (const char* part : {"read", "segment", "crop", "networks", "filter", "deform", "place", "write"})
+    EXPECT_TRUE(s.part_seconds.count(part)) << part;
+
+  const fs::path out(o.out);
+  std::ifstream in(out / "capture.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["format"], "weft-capture/1");
+  EXPECT_EQ(j["view"], "cam02");
+  ASSERT_EQ(j["frames"].size(), 6u);
+  const Character character = load_character(j["character"].get<std::string>());
+  const Motion motion = read_motion((out / "pose.motion").string(), character.skeleton.num_dofs());
+  ASSERT_EQ(motion.num_frames(), 6);
+  const BvhMotion bvh = read_bvh((out / "pose.bvh").string());
+  ASSERT_EQ(bvh.num_frames(), 6);
+  const PoseParametrisation param = pose_parametrisation(character);
+  const int pivot_bvh = bvh.joint_index(character.skeleton.joints[size_t(param.pivot_joint)].name);
+  ASSERT_GE(pivot_bvh, 0);
+  double largest_turn = 0;
+  for (int i = 0; i < 6; ++i) {
+    char id[8];
+    std::snprintf(id, sizeof(id), "%04d", i);
+    EXPECT_EQ(j["frames"][size_t(i)]["id"], i);
+    EXPECT_EQ(j["frames"][size_t(i)]["translation_from"], "keypoints");
+    for (const char* ext : {".ply", ".obj"}) {
+      EXPECT_TRUE(fs::exists(out / "meshes" / (std::string("body_") + id + ext))) << id << ext;
+      EXPECT_TRUE(fs::exists(out / "meshes" / (std::string("cloth_") + id + ext))) << id << ext;
+    }
+    EXPECT_TRUE(fs::exists(out / "overlays" / (std::string(id) + ".png")));
+    const TriangleMesh body = read_ply((out / "meshes" / (std::string("body_") + id + ".ply")).string());
+    const TriangleMesh cloth = read_ply((out / "meshes" / (std::string("cloth_") + id + ".ply")).string());
+    ASSERT_EQ(body.num_vertices(), character.body.mesh.num_vertices());
+    ASSERT_EQ(cloth.num_vertices(), character.cloth->mesh.num_vertices());
+    EXPECT_EQ(body.F, character.body.mesh.F);
+    // PADefNet is zero: the meshes are the template skinned by pose.motion's dofs, root
+    // chain included (RootPlacement reproduces the networks' rigid placement).
+    const PosedCharacter posed = pose_character(character, motion.dofs.row(i).transpose());
+    EXPECT_LT((posed.body - body.V).rowwise().norm().maxCoeff(), 2e-4) << "frame " << i;
+    EXPECT_LT((posed.cloth - cloth.V).rowwise().norm().maxCoeff(), 2e-4) << "frame " << i;
+    // The BVH's pivot joint is the skeleton's, and capture.json's pivot too.
+    const Eigen::Vector3d pivot = posed.joints[size_t(param.pivot_joint)].translation();
+    EXPECT_LT((bvh_global_transforms(bvh, i)[size_t(pivot_bvh)].translation() - pivot).norm(), 1e-6);
+    const auto& p = j["frames"][size_t(i)]["pivot"];
+    EXPECT_LT((Eigen::Vector3d(p[0], p[1], p[2]) - pivot).norm(), 1e-5);
+    const Eigen::Matrix3d turn = posed.joints[size_t(param.pivot_joint)].linear() *
+                                 character.bind[size_t(param.pivot_joint)].linear().transpose();
+    largest_turn = std::max(largest_turn, Eigen::AngleAxisd(turn).angle());
+  }
+  EXPECT_GT(largest_turn, 0.3) << "the random PoseNet bias should turn the root away from the rest pose";
+  const bool video = fs::exists(out / "overlay.mp4") || fs::exists(out / "overlay.avi");
+  EXPECT_TRUE(video);
+  EXPECT_FALSE(fs::exists(out / "overlay.partial.mp4"));
+}
+
+TEST(Infer, TheSilhouettePlacesABodyWhereItWasRendered) {
+  const Fixture& f = fixture();
+  const Character character = load_character((f.model / "character" / "character.yaml").string());
+  const std::vector<Camera> cameras = read_cameras_yaml((f.data / "cameras.yaml").string());
+  Vertices relative = pose_character(character, character.rest_dofs).body;
+  relative.rowwise() -= relative.colwise().mean();
+  for (const Camera& camera : {cameras[0], cameras[3]}) {
+    for (const Eigen::Vector3d truth : {Eigen::Vector3d(0.1, 0.9, -0.2), Eigen::Vector3d(-0.3, 0.8, 0.4)}) {
+      const Vertices placed = relative.rowwise() + truth.transpose();
+      const RenderResult r = render(camera, {{&character.body.mesh, &placed, 1}});
+      const Eigen::Vector3d t = translation_from_silhouette(camera, relative, cv::boundingRect(r.mask));
+      // At 3 m a pixel is about 1 cm across and the body about 150 px tall: a pixel of box
+      // height is 2 cm of depth.
+      const Eigen::Vector3d along = (camera.R.transpose() * Eigen::Vector3d::UnitZ());
+      const Eigen::Vector3d error = t - truth;
+      EXPECT_LT(std::abs(error.dot(along)), 0.04) << camera.name;
+      EXPECT_LT((error - error.dot(along) * along).norm(), 0.015) << camera.name;
+    }
+  }
+}
+
+TEST(Infer, BadInputsNameTheFileAndLeaveNoCapture) {
+  const Fixture& f = fixture();
+  const fs::path root = scratch_root() / "bad";
+  fs::create_directories(root);
+  CaptureOptions o;
+  o.model = f.model.string();
+  o.input = (f.data / "images" / "cam02").string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = "cam02";
+  o.out = (root / "out").string();
+
+  // A video OpenCV cannot open.
+  CaptureOptions video = o;
+  video.input = (root / "clip.mp4").string();
+  std::ofstream(video.input) << "not a video";
+  expect_error([&] { capture_sequence(video); }, {"clip.mp4", "cannot be opened as a video"});
+  // A camera for another image size.
+  std::vector<Camera> cameras = read_cameras_yaml(o.camera);
+  for (Camera& c : cameras) c.width = c.height = 128;
+  CaptureOptions camera = o;
+  camera.camera = (root / "small_cameras.yaml").string();
+  write_cameras_yaml(camera.camera, cameras);
+  expect_error([&] { capture_sequence(camera); }, {"small_cameras.yaml", "cam02", "128x128", "256x256"});
+  // A camera the file does not have.
+  CaptureOptions name = o;
+  name.camera_name = "cam99";
+  expect_error([&] { capture_sequence(name); }, {"cameras.yaml", "cam99"});
+  // A model folder without weights, and a folder that is no model.
+  const fs::path empty_model = root / "model_without_weights";
+  fs::create_directories(empty_model);
+  for (const char* file : {"model.yaml", "config.yaml"}) fs::copy_file(f.model / file, empty_model / file);
+  fs::copy(f.model / "character", empty_model / "character", fs::copy_options::recursive);
+  CaptureOptions weights = o;
+  weights.model = empty_model.string();
+  expect_error([&] { capture_sequence(weights); }, {"model_without_weights", "no model.safetensors"});
+  CaptureOptions no_model = o;
+  no_model.model = root.string();
+  expect_error([&] { capture_sequence(no_model); }, {"no model.yaml"});
+  EXPECT_FALSE(fs::exists(fs::path(o.out) / "capture.json"));
+}
