@@ -10,13 +10,11 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <regex>
 
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/capture_config.h"
-#include "capture/inference/frame_source.h"
-#include "capture/inference/green_screen.h"
+#include "capture/inference/sequence_input.h"
 #include "capture/inference/root_placement.h"
 #include "capture/inference/silhouette_translation.h"
 #include "capture/inference/temporal_filter.h"
@@ -54,56 +52,6 @@ std::string four_digits(int id) {
   return buf;
 }
 
-// The capture's camera: one for every frame, or one per frame named <name>_<id:04d>.
-class CaptureCameras {
- public:
-  CaptureCameras(const std::string& file, const std::string& wanted) : file_(file) {
-    for (const Camera& c : read_cameras_yaml(file)) by_name_[c.name] = c;
-    WEFT_CHECK(!by_name_.empty(), file, ": no cameras");
-    const std::regex per_frame("(.+)_([0-9]{4,})");
-    std::map<std::string, int> families;
-    for (const auto& [n, c] : by_name_) {
-      std::smatch m;
-      if (std::regex_match(n, m, per_frame)) ++families[m[1].str()];
-    }
-    if (!wanted.empty()) {
-      name_ = wanted;
-      per_frame_ = !by_name_.count(wanted) && families.count(wanted);
-      WEFT_CHECK(by_name_.count(wanted) || per_frame_, file, ": no camera '", wanted, "' (nor per-frame cameras ",
-                 wanted, "_0000, …); the file has ", listing());
-    } else if (by_name_.size() == 1) {
-      name_ = by_name_.begin()->first;
-    } else if (families.size() == 1 && families.begin()->second == int(by_name_.size())) {
-      name_ = families.begin()->first;
-      per_frame_ = true;
-    } else {
-      fail(file, ": several cameras (", listing(), "); choose one with --camera-name");
-    }
-  }
-  const std::string& name() const { return name_; }
-  bool per_frame() const { return per_frame_; }
-  const Camera& at(int id) const {
-    const std::string n = per_frame_ ? name_ + "_" + four_digits(id) : name_;
-    const auto it = by_name_.find(n);
-    WEFT_CHECK(it != by_name_.end(), file_, ": no camera '", n, "' for frame ", id);
-    return it->second;
-  }
-
- private:
-  std::string listing() const {
-    std::string s;
-    int k = 0;
-    for (const auto& [n, c] : by_name_) {
-      if (k++ == 6) return s + ", …";
-      s += (s.empty() ? "" : ", ") + n;
-    }
-    return s;
-  }
-  std::string file_, name_;
-  bool per_frame_ = false;
-  std::map<std::string, Camera> by_name_;
-};
-
 // What pass 1 keeps of a frame for pass 2.
 struct FrameRecord {
   int id = 0;
@@ -113,16 +61,6 @@ struct FrameRecord {
   int mapped_detections = 0;  // detected keypoints the character maps
   cv::Rect box;               // the mask's bounding box (empty: no foreground)
 };
-
-cv::Mat read_mask(const std::string& path, const cv::Size& size) {
-  const cv::Mat m = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  WEFT_CHECK(!m.empty(), path, ": cannot be read as a mask image");
-  WEFT_CHECK(m.size() == size, path, ": mask of ", m.cols, "x", m.rows, ", expected the frame's ", size.width, "x",
-             size.height);
-  cv::Mat out;
-  cv::threshold(m, out, 127, 255, cv::THRESH_BINARY);
-  return out;
-}
 
 Vertices rows_of(const Tensor& t, int64_t b) {  // [B,V,3] → V×3 of sample b
   const int64_t V = t.size(1);
@@ -203,22 +141,16 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   nets.pose_net->train(false);
   nets.deformation_net->train(false);
   const CaptureModel capture_model(character, model.config.network);
-  const CaptureCameras cameras(o.camera, o.camera_name);
-  FrameSource source(o.input);
-  const FrameFiles masks = o.masks.empty() ? FrameFiles() : FrameFiles(o.masks, ".png");
-  const FrameFiles detections = o.keypoints.empty() ? FrameFiles() : FrameFiles(o.keypoints, "_keypoints.json");
+  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, cfg.keying});
   WEFT_CHECK(!o.out.empty(), "weft infer: no output folder");
   const fs::path out(o.out);
   fs::create_directories(out / "meshes");
   if (cfg.overlays) fs::create_directories(out / "overlays");
-  const double fps = o.fps > 0 ? o.fps : source.fps() > 0 ? source.fps() : 30.0;
+  const double fps = o.fps > 0 ? o.fps : input.source().fps() > 0 ? input.source().fps() : 30.0;
   spdlog::info("model {} ({} at {}², weights {}); character {}: {} body + {} cloth vertices", o.model,
                model.config.network.backbone, model.config.network.input_size, model.weights, character.name,
                character.body.mesh.num_vertices(), character.has_cloth() ? character.cloth->mesh.num_vertices() : 0);
-  spdlog::info("input {} ({} frames{}); camera {}{}; masks: {}; keypoints: {}", o.input, source.size(),
-               source.is_video() ? fmt::format(", {:.3g} fps", source.fps()) : std::string(), cameras.name(),
-               cameras.per_frame() ? " (one per frame)" : "", o.masks.empty() ? "green-screen keying" : o.masks,
-               o.keypoints.empty() ? "none (translation from the silhouette)" : o.keypoints);
+  spdlog::info("{}", input.describe());
   clock.lap("load");
 
   // Pass 1: crops and both networks, batched.
@@ -228,38 +160,23 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   std::vector<FrameRecord> frames;
   std::vector<Eigen::VectorXd> pose_rows, deformation_rows;
   const std::vector<double>& keypoint_mask = capture_model.keypoint_mask();
-  const int total = o.max_frames >= 0 ? std::min(o.max_frames, source.size()) : source.size();
+  const int total = o.max_frames >= 0 ? std::min(o.max_frames, input.source().size()) : input.source().size();
   bool more = true;
   while (more) {
     std::vector<Sample> samples;
     while (int(samples.size()) < cfg.batch_size) {
       if (o.max_frames >= 0 && int(frames.size()) >= o.max_frames) { more = false; break; }
-      InputFrame f;
-      if (!source.next(f)) { more = false; break; }
-      clock.lap("read");
+      SequenceFrame f;
+      if (!input.next(f, &clock.seconds)) { more = false; break; }
       FrameRecord r;
-      r.id = f.id;
-      r.name = f.name;
-      r.camera = cameras.at(f.id);
-      WEFT_CHECK(f.bgr.cols == r.camera.width && f.bgr.rows == r.camera.height, o.camera, ": camera '",
-                 r.camera.name, "' is for ", r.camera.width, "x", r.camera.height, " images, but frame ", f.name,
-                 " of ", o.input, " is ", f.bgr.cols, "x", f.bgr.rows);
-      cv::Mat mask;
-      if (!masks.empty()) {
-        const std::string path = masks.find(f);
-        WEFT_CHECK(!path.empty(), o.masks, ": no mask for frame ", f.name, " (expected ", f.name, ".png)");
-        mask = read_mask(path, f.bgr.size());
-      } else {
-        mask = key_green_screen(f.bgr, cfg.keying);
-      }
-      r.box = cv::boundingRect(mask);
-      clock.lap("segment");
-      if (!detections.empty()) {
-        const std::string path = detections.find(f);
-        if (!path.empty()) r.detections = read_dataset_keypoints(path);
-        for (int k = 0; k < kBody25Count; ++k) r.mapped_detections += r.detections(k, 2) > 0 && keypoint_mask[size_t(k)] > 0;
-      }
-      samples.push_back(prepare_sample(f.bgr, mask, r.detections, r.camera, crop_options));
+      r.id = f.frame.id;
+      r.name = f.frame.name;
+      r.camera = f.camera;
+      r.box = cv::boundingRect(f.mask);
+      r.detections = f.detections;
+      for (int k = 0; k < kBody25Count; ++k) r.mapped_detections += r.detections(k, 2) > 0 && keypoint_mask[size_t(k)] > 0;
+      clock.t = Clock::now();
+      samples.push_back(prepare_sample(f.frame.bgr, f.mask, r.detections, r.camera, crop_options));
       frames.push_back(r);
       clock.lap("crop");
       if (progress) progress("networks", int(frames.size()), std::max(total, int(frames.size())));
@@ -294,6 +211,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   clock.lap("filter");
 
   // Pass 2: the deformation layer, placement and files.
+  FrameSource& source = input.source();
   source.rewind();
   CaptureSummary summary;
   summary.frames = n;
@@ -412,7 +330,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   j["synth_config"] = model.synth_config;
   j["input"] = fs::absolute(o.input).lexically_normal().string();
   j["camera"] = fs::absolute(o.camera).lexically_normal().string();
-  j["view"] = cameras.name();
+  j["view"] = input.cameras().name();
   j["masks"] = o.masks;
   j["keypoints"] = o.keypoints;
   j["fps"] = fps;

@@ -1,0 +1,69 @@
+#pragma once
+// A single-camera sequence as `weft infer` and `weft adapt` read it: per frame the image,
+// its camera, the person's mask (a mask folder, or green-screen keying) and the OpenPose
+// detections when a keypoint folder is given.
+#include <opencv2/core.hpp>
+
+#include <map>
+#include <string>
+
+#include "capture/inference/capture_config.h"
+#include "capture/inference/frame_source.h"
+#include "capture/io/camera.h"
+#include "capture/io/openpose.h"
+
+namespace weft::capture {
+
+// The sequence's camera: one for every frame, or one per frame named <name>_<id:04d>.
+class CaptureCameras {
+ public:
+  // wanted "": the file's only camera, or its only family of per-frame cameras. Errors
+  // name the file and the cameras it has.
+  CaptureCameras(const std::string& file, const std::string& wanted);
+  const std::string& name() const { return name_; }
+  bool per_frame() const { return per_frame_; }
+  const Camera& at(int id) const;  // an error naming the file when it has none for frame `id`
+
+ private:
+  std::string listing() const;
+  std::string file_, name_;
+  bool per_frame_ = false;
+  std::map<std::string, Camera> by_name_;
+};
+
+struct SequenceInputOptions {
+  std::string input;        // a video or an image folder (frame_source.h)
+  std::string camera;       // OpenCV FileStorage YAML
+  std::string camera_name;  // see CaptureCameras
+  std::string masks;        // "" : green-screen keying
+  std::string keypoints;    // "" : no detections
+  KeyingConfig keying;
+};
+
+struct SequenceFrame {
+  InputFrame frame;
+  Camera camera;
+  cv::Mat mask;                        // CV_8UC1 0/255, the frame's size
+  Body25 detections = Body25::Zero();  // full-image pixels; zeros without a detection
+  bool has_detections = false;         // the keypoint folder has a file for this frame
+};
+
+class SequenceInput {
+ public:
+  explicit SequenceInput(SequenceInputOptions options);
+  // The next frame; false at the end. Errors name the file: an image of another size than
+  // its camera's, a missing mask, an unreadable mask or keypoint file. part_seconds (when
+  // given) gains the time spent reading ("read") and segmenting ("segment").
+  bool next(SequenceFrame& frame, std::map<std::string, double>* part_seconds = nullptr);
+  FrameSource& source() { return source_; }
+  const CaptureCameras& cameras() const { return cameras_; }
+  std::string describe() const;  // one line for the log
+
+ private:
+  SequenceInputOptions options_;
+  CaptureCameras cameras_;
+  FrameSource source_;
+  FrameFiles masks_, keypoints_;
+};
+
+}  // namespace weft::capture
