@@ -14,12 +14,13 @@
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/capture_config.h"
-#include "capture/inference/sequence_input.h"
 #include "capture/inference/root_placement.h"
+#include "capture/inference/sequence_input.h"
 #include "capture/inference/silhouette_translation.h"
 #include "capture/inference/temporal_filter.h"
 #include "capture/io/atomic_file.h"
 #include "capture/io/mesh_io.h"
+#include "capture/io/png_file.h"
 #include "capture/motion/skeleton_bvh.h"
 #include "capture/render/renderer.h"
 #include "capture/training/capture_networks.h"
@@ -67,12 +68,6 @@ Vertices rows_of(const Tensor& t, int64_t b) {  // [B,V,3] → V×3 of sample b
   const Tensor f = t.to(DType::F64);
   const double* p = f.data<double>() + b * V * 3;
   return Eigen::Map<const Vertices>(p, V, 3);
-}
-
-void write_png(const std::string& path, const cv::Mat& image) {
-  std::vector<uchar> bytes;
-  WEFT_CHECK(cv::imencode(".png", image, bytes), path, ": PNG encoding failed");
-  write_bytes_atomically(path, bytes.data(), bytes.size());
 }
 
 class OverlayVideo {
@@ -302,7 +297,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
         cv::Mat blended;
         cv::addWeighted(drawn.rgb, cfg.overlay_alpha, f.bgr, 1 - cfg.overlay_alpha, 0, blended);
         blended.copyTo(overlay, drawn.mask);
-        if (cfg.overlays) write_png((out / "overlays" / (id + ".png")).string(), overlay);
+        if (cfg.overlays) write_png_atomically((out / "overlays" / (id + ".png")).string(), overlay);
         if (cfg.video) video.add(overlay);
       }
       frame_list.push_back({{"id", r.id},

@@ -10,6 +10,7 @@
 
 #include "capture/io/atomic_file.h"
 #include "capture/io/mesh_io.h"
+#include "capture/io/png_file.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -125,9 +126,7 @@ PoseSequenceSummary pose_sequence(const Character& ch, const Motion& motion, con
         colors.push_back(cv::Scalar(80, 150, 235));
       }
       const cv::Mat image = render_overlay(cam, meshes, verts, colors);
-      std::vector<uchar> png;
-      if (!cv::imencode(".png", image, png)) fail("cannot encode the overlay PNG for camera '", cam.name, "'");
-      write_bytes_atomically(frame_name(o.out_dir, "overlay_" + safe(cam.name), f, ".png"), png.data(), png.size());
+      write_png_atomically(frame_name(o.out_dir, "overlay_" + safe(cam.name), f, ".png"), image);
       ++s.images_written;
     }
     const auto t2 = clock::now();

@@ -17,17 +17,18 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "capture/motion/bvh.h"
-#include "capture/io/camera.h"
 #include "capture/character/character.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/motion/motion_retarget.h"
-#include "capture/io/openpose.h"
-#include "capture/io/mesh_io.h"
-#include "capture/motion/procedural_motion.h"
 #include "capture/character/skeletool_io.h"
+#include "capture/io/camera.h"
+#include "capture/io/mesh_io.h"
+#include "capture/io/openpose.h"
+#include "capture/io/png_file.h"
 #include "capture/io/strict_yaml.h"
 #include "capture/io/text_reader.h"
+#include "capture/motion/bvh.h"
+#include "capture/motion/motion_retarget.h"
+#include "capture/motion/procedural_motion.h"
+#include "capture/studio/garment_simulator.h"
 #include "graph/atomic_file.h"
 #include "graph/error.h"
 #include "physics/cloth_metrics.h"
@@ -330,12 +331,6 @@ void take_away_horizontal_path(const Skeleton& skeleton, Eigen::MatrixXd& dofs, 
 
 std::string frame_file(const fs::path& dir, const std::string& view, int frame, const char* suffix) {
   return (dir / view / (dataset_frame_name(frame) + suffix)).string();
-}
-
-void write_png(const std::string& path, const cv::Mat& image) {
-  std::vector<uchar> bytes;
-  WEFT_CHECK(cv::imencode(".png", image, bytes), path, ": PNG encoding failed");
-  write_bytes_atomically(path, bytes.data(), bytes.size());
 }
 
 void make_dir(const fs::path& dir) {
@@ -676,10 +671,10 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     const Body25 kp = synthesize_keypoints(cam, posed[f].body25, r.depth, noise,
                                            mix_seed(cfg.seed, static_cast<uint64_t>(v), static_cast<uint64_t>(f)));
     const auto b = Clock::now();
-    write_png(frame_file(out / "images", views[v], f, ".png"), r.rgb);
-    write_png(frame_file(out / "masks", views[v], f, ".png"), r.mask);
-    write_png(frame_file(out / "parts", views[v], f, ".png"), r.parts);
-    write_png(frame_file(out / "dt", views[v], f, ".png"), quantize_dt(dt, cfg.render.dt_scale));
+    write_png_atomically(frame_file(out / "images", views[v], f, ".png"), r.rgb);
+    write_png_atomically(frame_file(out / "masks", views[v], f, ".png"), r.mask);
+    write_png_atomically(frame_file(out / "parts", views[v], f, ".png"), r.parts);
+    write_png_atomically(frame_file(out / "dt", views[v], f, ".png"), quantize_dt(dt, cfg.render.dt_scale));
     OpenPoseFrame op;
     op.people.push_back(kp);
     write_openpose_json(frame_file(out / "keypoints", views[v], f, "_keypoints.json"), op);
@@ -698,7 +693,7 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
   summary.seconds_rendering = busy > 0 ? render_wall * render_seconds / busy : 0;
   summary.seconds_writing = busy > 0 ? render_wall * write_seconds / busy : 0;
 
-  write_png((out / "preview.png").string(), preview_sheet(out, views, frames));
+  write_png_atomically((out / "preview.png").string(), preview_sheet(out, views, frames));
 
   // Ground-truth meshes.
   for (int f = 0; f < frames; ++f) {

@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "capture/io/atomic_file.h"
+#include "capture/io/png_file.h"
 #include "capture/io/text_reader.h"
 #include "graph/error.h"
 
@@ -543,9 +544,7 @@ void plot_losses(const std::vector<LossRow>& rows, const std::string& png_path,
       draw_panel(img, cell, terms[i], rows, spans, xa, kPalette[i % palette], plot);
     }
   }
-  std::vector<uchar> png;
-  WEFT_CHECK(cv::imencode(".png", img, png), png_path, ": PNG encoding failed");
-  write_bytes_atomically(png_path, png.data(), png.size());
+  write_png_atomically(png_path, img);
 }
 
 }  // namespace weft::capture

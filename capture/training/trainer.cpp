@@ -458,6 +458,10 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
   } else if (options_.resume) {
     spdlog::info("{}: no checkpoint yet: starting from step 1", ckdir.string());
   }
+  if (done == 0 && !options_.init_weights.empty()) {
+    load_capture_networks(options_.init_weights, nets_);
+    spdlog::info("starting from the weights of {}", options_.init_weights);
+  }
   LossLog log((run / "losses.csv").string(), options_.resume ? done : -1);
   cut_validation(run / "validation.csv", options_.resume ? done : 0);
   const int64_t total = cfg_.total_steps();

@@ -26,6 +26,10 @@ struct TrainOptions {
   std::string run;      // the run folder
   bool resume = false;  // continue from RUN's last checkpoint (RUN must hold one)
   int64_t stop_after = -1;  // stop after this global step (tests; −1: train to the end)
+  // Start from these weights (model.safetensors or a checkpoint of the same networks)
+  // instead of a fresh initialisation: domain adaptation refines a trained model. A
+  // resumed run ignores it (its checkpoint holds the weights).
+  std::string init_weights;
 };
 
 struct TrainProgress {

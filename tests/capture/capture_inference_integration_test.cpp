@@ -15,6 +15,7 @@
 #include <random>
 
 #include "capture/character/skeletool_io.h"
+#include "capture/inference/domain_adaptation.h"
 #include "capture/inference/sequence_capture.h"
 #include "capture/inference/silhouette_translation.h"
 #include "capture/io/mesh_io.h"
@@ -22,6 +23,7 @@
 #include "capture/render/renderer.h"
 #include "capture/studio/synthetic_studio.h"
 #include "capture/training/capture_networks.h"
+#include "capture/training/loss_log.h"
 #include "capture/training/model_folder.h"
 #include "nn/checkpoint.h"
 #include "tests/capture/test_files.h"
@@ -204,4 +206,46 @@ TEST(Infer, BadInputsNameTheFileAndLeaveNoCapture) {
   no_model.model = root.string();
   expect_error([&] { capture_sequence(no_model); }, {"no model.yaml"});
   EXPECT_FALSE(fs::exists(fs::path(o.out) / "capture.json"));
+}
+
+TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
+  const Fixture& f = fixture();
+  AdaptOptions o;
+  o.model = f.model.string();
+  o.input = (f.data / "images" / "cam05").string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = "cam05";
+  o.keypoints = (f.data / "keypoints" / "cam05").string();
+  o.masks = (f.data / "masks" / "cam05").string();
+  o.iterations = 6;
+  o.out = (scratch_root() / "adapted").string();
+  const AdaptSummary s = adapt_model(o);
+  EXPECT_EQ(s.frames, 6);
+  EXPECT_EQ(s.training.last_step, 12);
+  // The sequence became a one-view dataset, and OUT a model folder weft infer can use.
+  const DatasetInfo info = read_dataset_info(s.sequence);
+  EXPECT_EQ(info.views, (std::vector<std::string>{"cam05"}));
+  EXPECT_EQ(info.splits.at("train").size(), 6u);
+  const ModelFolder adapted = read_model_folder(o.out);
+  EXPECT_EQ(adapted.config.stages[0].steps, 6);
+  // PoseNet's stage lowers L_lm on the sequence's own detections.
+  const std::vector<LossRow> rows = read_loss_log((fs::path(o.out) / "losses.csv").string());
+  ASSERT_EQ(rows.size(), 12u);
+  EXPECT_LT(rows[5].terms.at("landmarks"), rows[0].terms.at("landmarks"));
+
+  // Interrupted after step 3 and resumed: the same losses as the uninterrupted run.
+  AdaptOptions interrupted = o;
+  interrupted.out = (scratch_root() / "adapted_resumed").string();
+  interrupted.stop_after = 3;
+  adapt_model(interrupted);
+  interrupted.stop_after = -1;
+  interrupted.resume = true;
+  adapt_model(interrupted);
+  EXPECT_EQ(weft::capture::testing::slurp(fs::path(interrupted.out) / "losses.csv"),
+            weft::capture::testing::slurp(fs::path(o.out) / "losses.csv"));
+
+  // Without detections there is nothing to adapt to.
+  AdaptOptions no_keypoints = o;
+  no_keypoints.keypoints.clear();
+  expect_error([&] { adapt_model(no_keypoints); }, {"--keypoints"});
 }
