@@ -13,7 +13,10 @@
 //   median, and the penetration before and after (deepest vertex, mean depth of the
 //   vertices inside), Newton iterations, the solved region and where the time goes.
 // Usage: bench_collision_resolution DATASET SYNTH_CONFIG [FRAMES=20] [RUNS=3] [SEED=1]
-//                                   [perturbation=patches|network] [radius=M] [k=1/s²]
+//                                   [perturbation=patches|network] [radius=M] [k=1/s²] [compare=0|1]
+// compare=1 also solves the whole cloth per frame (untimed) and reports how far the
+// region's answer is from it (the region's truncation error), over the vertices moved by
+// the region or clear of the collision band at the start.
 // e.g. bench_collision_resolution /tmp/collide/train40 configs/synth/training.yaml 20 5
 // SYNTH_CONFIG must be the config the dataset was made with (garment_windows.h).
 #include <algorithm>
@@ -21,6 +24,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -107,6 +111,7 @@ int main(int argc_all, char** argv_all) {
   const std::string kind = key("perturbation", "patches");
   const std::string radius = key("radius", "");
   const std::string k = key("k", "");
+  const bool compare = key("compare", "0") == "1";
   if (!named.empty()) {
     std::fprintf(stderr, "bench_collision_resolution: unknown option '%s'\n", named.begin()->first.c_str());
     return 2;
@@ -116,9 +121,10 @@ int main(int argc_all, char** argv_all) {
   const GarmentSequence s = load_garment_sequence(dataset, config);
   const double mpu = s.character.metres_per_unit;
   const physics::Positions rest = to_positions(s.character.cloth->mesh.V, mpu);
-  GarmentCollisionResolver resolver(s.character, s.simulation);
+  GarmentCollisionResolver resolver(s.character, s.simulation), whole(s.character, s.simulation);
   if (!radius.empty()) resolver.options().region_radius = std::strtod(radius.c_str(), nullptr);
-  if (!k.empty()) resolver.options().proximal_stiffness = std::strtod(k.c_str(), nullptr);
+  if (!k.empty()) resolver.options().proximal_stiffness = whole.options().proximal_stiffness = std::strtod(k.c_str(), nullptr);
+  whole.options().region_radius = std::numeric_limits<double>::infinity();
   const physics::CollisionResolutionOptions& o = resolver.options();
   std::printf("dataset %s: %d frames, garment %d vertices, body %d vertices; perturbation %s, %d frames x %d runs, "
               "seed %llu; thickness %.4f m, collision stiffness %.0f N/m, proximal k %.3g 1/s^2, region radius %.3f m, "
@@ -130,6 +136,9 @@ int main(int argc_all, char** argv_all) {
 
   std::vector<double> wall, cpu, body_ms, dist_ms, setup_ms, newton_ms, iterations, region;
   std::vector<double> before_max, before_mean, after_max, after_mean, inside_before, inside_after, moved_max;
+  std::vector<double> region_error;  // mm, against the whole cloth (compare=1)
+  std::map<std::string, std::vector<double>> energy_ms;  // Newton's time in each energy
+  std::vector<double> linear_ms;
   std::map<std::string, int> statuses;
   const int span = std::max(1, s.frames - 1);
   for (int i = 0; i < frames; ++i) {
@@ -167,14 +176,35 @@ int main(int argc_all, char** argv_all) {
     for (int v = 0; v < pass.x.size() / 3; ++v)
       moved = std::max(moved, (pass.x.segment<3>(3 * v) - p.x_prev.segment<3>(3 * v)).norm());
     moved_max.push_back(1e3 * moved);
+    for (size_t e = 0; e < pass.energy_ms.size(); ++e) energy_ms[pass.energy_names[e]].push_back(pass.energy_ms[e]);
+    linear_ms.push_back(pass.linear_solve_ms);
+    std::string versus;
+    if (compare) {
+      const GarmentCollisionResolution w = whole.resolve(body_units, cloth_units);
+      double e = 0;
+      // Over the vertices the region's solve is meant to match: all but those resting in the
+      // collision band away from any penetration, which the whole-cloth solve re-balances
+      // (pushes out to the penalty's equilibrium) and the region leaves alone by design.
+      for (int v = 0; v < pass.x.size() / 3; ++v) {
+        const bool moved_by_region = pass.x.segment<3>(3 * v) != p.x_prev.segment<3>(3 * v);
+        const double d0 = body.closest_point(p.x_prev.segment<3>(3 * v)).distance;
+        if (moved_by_region || d0 >= o.collision_thickness)
+          e = std::max(e, (pass.x.segment<3>(3 * v) - w.pass.x.segment<3>(3 * v)).norm());
+      }
+      region_error.push_back(1e3 * e);
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "; whole cloth: %d iterations, %.1f ms, max after %.3f mm, region differs by %.3f mm",
+                    w.pass.iterations, w.pass.total_ms, 1e3 * w.pass.after.max_depth, region_error.back());
+      versus = buf;
+    }
     ++statuses[physics::to_string(pass.status)];
     std::printf("frame %d: %s, %d Newton iterations, region %d vertices; inside before %d (max %.2f mm, mean %.2f mm), "
                 "after %d (max %.3f mm, mean %.3f mm); largest move %.1f mm; %.1f ms wall, %.1f ms cpu (median of %d; "
-                "body %.1f, distances %.1f, setup %.1f, Newton %.1f)\n",
+                "body %.1f, distances %.1f, setup %.1f, Newton %.1f)%s\n",
                 f, physics::to_string(pass.status), pass.iterations, pass.region_vertices, pass.before.vertices_inside,
                 before_max.back(), before_mean.back(), pass.after.vertices_inside, after_max.back(), after_mean.back(),
                 moved_max.back(), wall.back(), cpu.back(), runs, r.body_ms, pass.distance_ms, pass.setup_ms,
-                pass.newton_ms);
+                pass.newton_ms, versus.c_str());
     std::fflush(stdout);
   }
   std::string status_list;
@@ -185,12 +215,16 @@ int main(int argc_all, char** argv_all) {
       "paper_ratio=%.0f median_body_ms=%.1f median_distance_ms=%.1f median_setup_ms=%.1f median_newton_ms=%.1f "
       "median_iterations=%.0f max_iterations=%.0f median_region=%.0f before_max_mm(median/max)=%.2f/%.2f "
       "before_mean_mm=%.2f before_inside=%.0f after_max_mm(median/max)=%.3f/%.3f after_mean_mm=%.3f "
-      "after_inside=%.1f frames_over_1mm=%d largest_move_mm(median)=%.1f load=%.2f\n",
+      "after_inside=%.1f frames_over_1mm=%d largest_move_mm(median)=%.1f region_error_mm(median/max)=%.3f/%.3f "
+      "load=%.2f\n",
       wall.size(), runs, kind.c_str(), status_list.c_str(), median(wall), median(cpu), max_of(wall),
       2000.0 / std::max(median(cpu), 1e-9), median(body_ms), median(dist_ms), median(setup_ms), median(newton_ms),
       median(iterations), max_of(iterations), median(region), median(before_max), max_of(before_max), mean(before_mean),
       mean(inside_before), median(after_max), max_of(after_max), mean(after_mean), mean(inside_after),
       static_cast<int>(std::count_if(after_max.begin(), after_max.end(), [](double d) { return d > 1.0; })),
-      median(moved_max), load_average());
+      median(moved_max), median(region_error), max_of(region_error), load_average());
+  std::printf("NEWTON_BREAKDOWN median ms per frame: linear_solve=%.1f", median(linear_ms));
+  for (const auto& [name, v] : energy_ms) std::printf(" %s=%.1f", name.c_str(), median(v));
+  std::printf("\n");
   return 0;
 }

@@ -151,8 +151,8 @@ CollisionResolutionResult resolve_collisions(const ClothMesh& mesh, const Positi
   result.before = penetration_of(d);
   std::vector<int> seeds;
   for (int i = 0; i < n; ++i)
-    if (d[i] < o.collision_thickness) seeds.push_back(i);
-  if (seeds.empty()) {  // no vertex feels the penalty: x₀ is the minimiser
+    if (d[i] < 0) seeds.push_back(i);
+  if (seeds.empty()) {  // nothing inside: the prediction is kept as it is
     result.after = result.before;
     result.energies.push_back(0.0);
     result.total_ms = ms_since(t_start);
@@ -215,7 +215,7 @@ CollisionResolutionResult resolve_collisions(const ClothMesh& mesh, const Positi
   PinEnergy pins(pinned, targets, o.pin_stiffness);
   CollisionEnergy collision = obstacle_energy(m, obstacles, o);
   NewtonOptions newton;
-  newton.max_iterations = o.max_iterations;
+  newton.max_iterations = 1;  // one iteration per call: the loop below judges convergence
   newton.tolerance = o.tolerance_m;
   NewtonSolver solver(m, {&proximal, &membrane, &bending, &pins, &collision}, newton);
   // ‖∇_i E‖ / (k·m_i) ≤ tolerance_m: the residual as a displacement (see the options).
@@ -224,12 +224,35 @@ CollisionResolutionResult resolve_collisions(const ClothMesh& mesh, const Positi
   result.setup_ms = ms_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  Positions x = x_sub;
-  const NewtonReport report = solver.minimize(x);
+  Positions x = x_sub, x_before;
+  result.status = StepStatus::max_iterations;
+  result.energy_ms.assign(solver.energies().size(), 0.0);
+  for (const Energy* e : solver.energies()) result.energy_names.push_back(e->name());
+  for (int it = 0; it < o.max_iterations; ++it) {
+    x_before = x;
+    const NewtonReport report = solver.minimize(x);
+    if (result.energies.empty() && !report.accepted_energies.empty())
+      result.energies.push_back(report.accepted_energies.front());
+    if (report.status == StepStatus::converged && report.iterations == 0) {
+      result.status = StepStatus::converged;
+      break;
+    }
+    if (report.status == StepStatus::line_search_failed || report.status == StepStatus::non_finite) {
+      result.status = report.status;
+      break;
+    }
+    ++result.iterations;
+    for (size_t e = 0; e < report.energy_ms.size(); ++e) result.energy_ms[e] += report.energy_ms[e];
+    result.linear_solve_ms += report.linear_solve_ms;
+    result.energies.push_back(report.accepted_energies.back());
+    double move = 0;
+    for (int j = 0; j < m; ++j) move = std::max(move, (x.segment<3>(3 * j) - x_before.segment<3>(3 * j)).norm());
+    if (report.status == StepStatus::converged || move <= o.tolerance_m) {
+      result.status = StepStatus::converged;
+      break;
+    }
+  }
   result.newton_ms = ms_since(t0);
-  result.status = report.status;
-  result.iterations = report.iterations;
-  result.energies = report.accepted_energies;
   if (x.allFinite()) {
     for (int j = 0; j < region_size; ++j) result.x.segment<3>(3 * global[j]) = x.segment<3>(3 * j);
   } else {
