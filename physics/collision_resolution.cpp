@@ -110,6 +110,8 @@ void validate(const CollisionResolutionOptions& o) {
   WEFT_CHECK(o.max_iterations >= 1, "collision resolution: max_iterations must be >= 1, got ", o.max_iterations);
   WEFT_CHECK(std::isfinite(o.tolerance_m) && o.tolerance_m > 0,
              "collision resolution: tolerance_m must be > 0 m, got ", o.tolerance_m);
+  WEFT_CHECK(std::isfinite(o.energy_tolerance) && o.energy_tolerance >= 0,
+             "collision resolution: energy_tolerance must be >= 0, got ", o.energy_tolerance);
   WEFT_CHECK(o.min_reference_area_ratio >= 0 && o.min_reference_area_ratio < 1,
              "collision resolution: min_reference_area_ratio must be in [0, 1), got ", o.min_reference_area_ratio);
 }
@@ -250,6 +252,15 @@ CollisionResolutionResult resolve_collisions(const ClothMesh& mesh, const Positi
     if (report.status == StepStatus::converged || move <= o.tolerance_m) {
       result.status = StepStatus::converged;
       break;
+    }
+    const double e_prev = result.energies[result.energies.size() - 2], e_now = result.energies.back();
+    if (e_prev - e_now <= o.energy_tolerance * std::abs(e_now)) {
+      bool clear = true;
+      for (int j = 0; j < region_size && clear; ++j) clear = collision.min_signed_distance(x.segment<3>(3 * j)) >= 0;
+      if (clear) {
+        result.status = StepStatus::converged;
+        break;
+      }
     }
   }
   result.newton_ms = ms_since(t0);

@@ -58,6 +58,11 @@ struct CollisionResolutionOptions {
   // a kink (concave creases, edges of the left-out faces) the penalty is not smooth and
   // Newton's line search stalls next to the minimiser with the residual above the test.
   double tolerance_m = 1.0e-4;
+  // Also converged when an iteration lowered E by at most this fraction of E and no solved
+  // vertex is inside any more: measured on the skirt, E then has settled to 0.1 % while
+  // the position test above would take as many iterations again for sub-millimetre
+  // refinements. 0 switches this test off.
+  double energy_tolerance = 1.0e-3;
   // A predicted triangle whose area fell below this fraction of its rest area has no
   // usable shape to measure elasticity from; it is left out of the membrane and bending.
   double min_reference_area_ratio = 1.0e-3;
