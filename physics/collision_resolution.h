@@ -26,9 +26,10 @@
 // (CHOLMOD, regularisation, step filter, Armijo line search), on that region.
 //
 // Guarantees: the returned x is finite; every accepted Newton iterate lowers E (the
-// report's energies); vertices outside the region are not moved. The penalty leaves a
-// pushed-out vertex near the band's edge (between 0 and the thickness outside the
-// surface); the stats report what is left inside after the pass.
+// report's energies); vertices outside the region are not moved. Not guaranteed: that
+// nothing stays inside — a vertex ends where the penalty balances the elastic and proximal
+// forces, normally in the band outside the surface (on the 3k skirt nothing was left
+// inside, docs/BENCHMARKS.md); the stats report what is left inside after the pass.
 #include <limits>
 #include <string>
 #include <vector>
@@ -48,8 +49,8 @@ struct CollisionResolutionOptions {
   // k of the proximal term k/2 ‖x − x₀‖²_M, in 1/s² (N/m per kg of vertex mass). Larger
   // keeps the correction more local (decay length sqrt(E·t/(k·ρ))).
   double proximal_stiffness = 1.0e6;
-  // Geodesic radius (m) of the solved region around the band's vertices; infinity solves
-  // the whole cloth.
+  // Geodesic radius (m) of the solved region around the vertices inside; infinity solves
+  // the whole cloth (connected to a vertex inside; those resting in the band then move too).
   double region_radius = 0.06;
   int max_iterations = 20;
   // Converged when every vertex's force residual is below the proximal force of this
