@@ -123,7 +123,8 @@ int main(int argc_all, char** argv_all) {
   const physics::Positions rest = to_positions(s.character.cloth->mesh.V, mpu);
   GarmentCollisionResolver resolver(s.character, s.simulation), whole(s.character, s.simulation);
   if (!radius.empty()) resolver.options().region_radius = std::strtod(radius.c_str(), nullptr);
-  if (!k.empty()) resolver.options().proximal_stiffness = whole.options().proximal_stiffness = std::strtod(k.c_str(), nullptr);
+  if (!k.empty())
+    resolver.options().proximal_stiffness = whole.options().proximal_stiffness = std::strtod(k.c_str(), nullptr);
   whole.options().region_radius = std::numeric_limits<double>::infinity();
   const physics::CollisionResolutionOptions& o = resolver.options();
   std::printf("dataset %s: %d frames, garment %d vertices, body %d vertices; perturbation %s, %d frames x %d runs, "
@@ -193,7 +194,8 @@ int main(int argc_all, char** argv_all) {
       }
       region_error.push_back(1e3 * e);
       char buf[200];
-      std::snprintf(buf, sizeof buf, "; whole cloth: %d iterations, %.1f ms, max after %.3f mm, region differs by %.3f mm",
+      std::snprintf(buf, sizeof buf,
+                    "; whole cloth: %d iterations, %.1f ms, max after %.3f mm, region differs by %.3f mm",
                     w.pass.iterations, w.pass.total_ms, 1e3 * w.pass.after.max_depth, region_error.back());
       versus = buf;
     }

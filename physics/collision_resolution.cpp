@@ -203,7 +203,8 @@ CollisionResolutionResult resolve_collisions(const ClothMesh& mesh, const Positi
   ClothMesh sub = make_cloth_mesh(x_sub, std::move(tris), o.material.density);
   sub.mass = mass;
 
-  InertiaEnergy proximal(mass, 1.0 / std::sqrt(o.proximal_stiffness));  // m/(2h²)‖x − x̂‖² = k/2 m‖x − x̂‖²
+  // m/(2h²)‖x − x̂‖² with h = 1/√k is the proximal term k/2 m‖x − x₀‖².
+  InertiaEnergy proximal(mass, 1.0 / std::sqrt(o.proximal_stiffness));
   proximal.set_prediction(x_sub);
   MembraneEnergy membrane(sub, o.material);
   membrane.set_hessian_projection(false);  // as the simulator: exact, corrected when indefinite

@@ -25,7 +25,8 @@ const Character& coarse_skirt() {
   static std::unique_ptr<Character> ch;
   if (!ch)
     ch = std::make_unique<Character>(
-        make_default_character(load_default_character_config(repo_file("configs/characters/makehuman_skirt_coarse.yaml")))
+        make_default_character(
+            load_default_character_config(repo_file("configs/characters/makehuman_skirt_coarse.yaml")))
             .character);
   return *ch;
 }

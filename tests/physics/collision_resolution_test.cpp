@@ -144,6 +144,21 @@ TEST(CollisionResolution, HeldVerticesStayAtThePrediction) {
   EXPECT_LT(max_move(pinned.x, mesh.rest, held), 2e-4);
 }
 
+TEST(CollisionResolution, CollapsedPredictedTrianglesAreNoObstacle) {
+  // A prediction with two vertices on top of each other inside the sphere: their
+  // triangles have no shape to measure elasticity from and are left out, the rest comes out.
+  const ClothMesh mesh = flat_cloth();
+  Positions x0 = mesh.rest;
+  const int centre = 20 * 41 + 20;
+  x0.segment<3>(3 * (centre + 1)) = x0.segment<3>(3 * centre);
+  CollisionObstacles obstacles;
+  obstacles.spheres = {poking_sphere()};
+  const CollisionResolutionResult r = resolve_collisions(mesh, x0, obstacles, options());
+  EXPECT_TRUE(r.x.allFinite());
+  EXPECT_LE(r.after.max_depth, 1e-3);
+  expect_energy_decreases(r);
+}
+
 TEST(CollisionResolution, BadInputIsOneClearError) {
   const ClothMesh mesh = flat_cloth();
   CollisionObstacles obstacles;
