@@ -84,6 +84,18 @@ BodyMesh::BodyMesh(Eigen::MatrixX3d vertices, std::vector<std::array<int, 3>> fa
     nodes_.reserve(2 * active_.size());
     build(0, static_cast<int>(active_.size()));
   }
+  // Edge ids of the active faces, once: the per-frame normals then sum into a vector
+  // instead of a map (set_vertices runs every frame on a 27k-face body).
+  std::map<std::pair<int, int>, int> edge_id;
+  face_edges_.assign(faces_.size(), {-1, -1, -1});
+  for (int f : active_)
+    for (int k = 0; k < 3; ++k) {
+      const int i = faces_[f][k], j = faces_[f][(k + 1) % 3];
+      face_edges_[f][k] =
+          edge_id.emplace(std::make_pair(std::min(i, j), std::max(i, j)), static_cast<int>(edge_id.size()))
+              .first->second;
+    }
+  num_edges_ = static_cast<int>(edge_id.size());
   compute_normals();
 }
 
@@ -167,7 +179,7 @@ void BodyMesh::compute_normals() {
   vertex_normals_.assign(nv, Eigen::Vector3d::Zero());
   edge_normals_.assign(faces_.size(), {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
                                        Eigen::Vector3d::Zero()});
-  std::map<std::pair<int, int>, Eigen::Vector3d> edge_sum;
+  std::vector<Eigen::Vector3d> edge_sum(num_edges_, Eigen::Vector3d::Zero());
   for (int f : active_) {
     const auto& t = faces_[f];
     Eigen::Vector3d p[3];
@@ -180,19 +192,14 @@ void BodyMesh::compute_normals() {
       const double denom = e1.norm() * e2.norm();
       const double angle = denom > 0 ? std::acos(std::clamp(e1.dot(e2) / denom, -1.0, 1.0)) : 0;
       vertex_normals_[t[k]] += angle * face_normals_[f];
-      const int i = t[k], j = t[(k + 1) % 3];
-      // emplace: Eigen vectors are not zero-initialised by default construction.
-      auto it = edge_sum.emplace(std::make_pair(std::min(i, j), std::max(i, j)),
-                                 Eigen::Vector3d::Zero()).first;
-      it->second += face_normals_[f];
+      edge_sum[face_edges_[f][k]] += face_normals_[f];
     }
   }
   for (auto& n : vertex_normals_)
     if (n.norm() > 0) n.normalize();
   for (int f : active_)
     for (int k = 0; k < 3; ++k) {
-      const int i = faces_[f][k], j = faces_[f][(k + 1) % 3];
-      const Eigen::Vector3d s = edge_sum[{std::min(i, j), std::max(i, j)}];
+      const Eigen::Vector3d& s = edge_sum[face_edges_[f][k]];
       edge_normals_[f][k] = s.norm() > 0 ? Eigen::Vector3d(s.normalized()) : face_normals_[f];
     }
 }

@@ -62,6 +62,8 @@ class BodyMesh {
   std::vector<Node> nodes_;
   std::vector<Eigen::Vector3d> face_normals_, vertex_normals_;
   std::vector<std::array<Eigen::Vector3d, 3>> edge_normals_;  // per face, edge (k, k+1)
+  std::vector<std::array<int, 3>> face_edges_;  // per active face, the id of edge (k, k+1)
+  int num_edges_ = 0;
 };
 
 }  // namespace weft::physics
