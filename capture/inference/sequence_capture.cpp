@@ -23,6 +23,7 @@
 #include "capture/io/png_file.h"
 #include "capture/motion/skeleton_bvh.h"
 #include "capture/render/renderer.h"
+#include "capture/studio/garment_collision_resolution.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/model_folder.h"
 #include "graph/autograd.h"
@@ -205,11 +206,21 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
       gaussian_filter_frames(stack(deformation_rows), ids, cfg.filter_sigma_frames, cfg.filter_radius_frames);
   clock.lap("filter");
 
+  std::unique_ptr<GarmentCollisionResolver> resolver;
+  if (o.resolve_collisions) {
+    WEFT_CHECK(character.has_cloth(), model.character, ": --resolve-collisions needs a garment");
+    WEFT_CHECK(!model.synth_config.empty(), o.model,
+               "/model.yaml: no synth_config, so no garment material for --resolve-collisions (train with "
+               "physics.synth_config set)");
+    resolver = std::make_unique<GarmentCollisionResolver>(character, load_synth_config(model.synth_config).simulation);
+  }
+
   // Pass 2: the deformation layer, placement and files.
   FrameSource& source = input.source();
   source.rewind();
   CaptureSummary summary;
   summary.frames = n;
+  summary.metres_per_unit = character.metres_per_unit;
   const RootPlacement placement(character);
   const PoseParametrisation& param = capture_model.parametrisation();
   Motion motion;
@@ -262,6 +273,20 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
         translation += shift;
       }
       ++(from_keypoints ? summary.translations_from_keypoints : summary.translations_from_silhouette);
+      clock.lap("deform");
+      nlohmann::json collisions;
+      if (resolver) {
+        const GarmentCollisionResolution resolved = resolver->resolve(body, cloth);
+        cloth = resolved.cloth;
+        const double to_units = 1.0 / character.metres_per_unit;
+        summary.penetration_before = std::max(summary.penetration_before, resolved.pass.before.max_depth * to_units);
+        summary.penetration_after = std::max(summary.penetration_after, resolved.pass.after.max_depth * to_units);
+        collisions = {{"max_depth_before", resolved.pass.before.max_depth * to_units},
+                      {"max_depth_after", resolved.pass.after.max_depth * to_units},
+                      {"vertices_inside_before", resolved.pass.before.vertices_inside},
+                      {"vertices_inside_after", resolved.pass.after.vertices_inside}};
+        clock.lap("collisions");
+      }
       Eigen::Matrix3d rotation;
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) rotation(i, j) = R.data<double>()[b * 9 + i * 3 + j];
@@ -304,6 +329,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
                             {"source", r.name},
                             {"pivot", {translation.x(), translation.y(), translation.z()}},
                             {"translation_from", from_keypoints ? "keypoints" : r.box.empty() ? "none" : "silhouette"}});
+      if (resolver) frame_list.back()["collisions"] = collisions;
       clock.lap("write");
       if (progress) progress("meshes", ++written, n);
     }
@@ -330,7 +356,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   j["keypoints"] = o.keypoints;
   j["fps"] = fps;
   j["filter"] = {{"sigma_frames", cfg.filter_sigma_frames}, {"radius_frames", cfg.filter_radius_frames}};
-  j["collisions_resolved"] = false;
+  j["collisions_resolved"] = o.resolve_collisions;
   j["video"] = video_path.empty() ? "" : fs::path(video_path).filename().string();
   j["frames"] = frame_list;
   j["timing"] = {{"seconds", summary.seconds}, {"frames_per_second", summary.fps()}, {"parts", clock.seconds}};

@@ -10,7 +10,8 @@
 //     folder gives the frame's detections (two or more mapped keypoints), else from the
 //     silhouette: the depth at which the predicted body's projected height matches the
 //     mask's, and the position that centres its projection on the mask's box;
-//  5. the deformation layer: posed and deformed body and cloth in world coordinates;
+//  5. the deformation layer: posed and deformed body and cloth in world coordinates, and
+//     with resolve_collisions the cloth pushed out of the body;
 //  6. written to OUT (docs/CAPTURE.md): meshes/body_<id>.ply|obj and cloth_<id>.ply|obj
 //     (the template's topology, character units), pose.motion (the character's dofs, the
 //     root chain solved so the skeleton stands where the capture put it: root_placement.h),
@@ -35,13 +36,21 @@ struct CaptureOptions {
   std::string out;
   double fps = 0;           // frame rate for pose.bvh and the video (0: the video's, else 30)
   int max_frames = -1;      // stop after this many frames (−1: all)
+  // The paper's optional final collision resolution: cloth vertices pushed out of the body
+  // (capture/studio/garment_collision_resolution.h) with the garment material of the
+  // model's synth config; needs a model trained with one (physics.synth_config).
+  bool resolve_collisions = false;
 };
 
 struct CaptureSummary {
   int frames = 0;
   int translations_from_keypoints = 0, translations_from_silhouette = 0;
   double seconds = 0;
-  std::map<std::string, double> part_seconds;  // read, segment, crop, networks, filter, deform, place, write
+  std::map<std::string, double> part_seconds;  // read, segment, crop, networks, filter, deform, collisions, place, write
+  // With resolve_collisions: the deepest cloth vertex inside the body over all frames,
+  // before and after the pass (character units).
+  double penetration_before = 0, penetration_after = 0;
+  double metres_per_unit = 1;  // the character's
   double fps() const { return seconds > 0 ? frames / seconds : 0; }
 };
 

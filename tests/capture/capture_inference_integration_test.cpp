@@ -249,3 +249,24 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
   no_keypoints.keypoints.clear();
   expect_error([&] { adapt_model(no_keypoints); }, {"--keypoints"});
 }
+
+TEST(Infer, ResolvesCollisionsWhenAsked) {
+  const Fixture& f = fixture();
+  CaptureOptions o;
+  o.model = f.model.string();
+  o.input = (f.data / "images" / "cam04").string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = "cam04";
+  o.keypoints = (f.data / "keypoints" / "cam04").string();
+  o.resolve_collisions = true;
+  o.out = (scratch_root() / "resolved").string();
+  const CaptureSummary s = capture_sequence(o);
+  EXPECT_TRUE(s.part_seconds.count("collisions"));
+  EXPECT_LE(s.penetration_after, 1e-3 / s.metres_per_unit);  // ≤ 1 mm
+  std::ifstream in(fs::path(o.out) / "capture.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_TRUE(j["collisions_resolved"].get<bool>());
+  for (const auto& frame : j["frames"]) {
+    EXPECT_LE(frame["collisions"]["max_depth_after"].get<double>(), frame["collisions"]["max_depth_before"].get<double>() + 1e-12);
+  }
+}
