@@ -26,6 +26,7 @@
 #include "capture/training/loss_log.h"
 #include "capture/training/model_folder.h"
 #include "nn/checkpoint.h"
+#include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
@@ -35,40 +36,46 @@ using weft::capture::testing::repo_file;
 
 namespace {
 
-fs::path scratch_root() { return fs::temp_directory_path() / ("weft_infer_test_" + std::to_string(::getpid())); }
+// This process's scratch folder, removed at exit.
+fs::path scratch_root() {
+  static const fs::path root = [] {
+    const fs::path r = fs::temp_directory_path() / ("weft_infer_test_" + std::to_string(::getpid()));
+    fs::remove_all(r);
+    fs::create_directories(r);
+    return r;
+  }();
+  static struct Cleanup {
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(root, ec);
+    }
+  } cleanup;
+  return root;
+}
 
 struct Fixture {
   fs::path data, model;
 };
 
+// The tiny dataset and a model folder of untrained networks for it (shared_fixture.h).
 const Fixture& fixture() {
   static std::unique_ptr<Fixture> f;
   if (!f) {
     f = std::make_unique<Fixture>();
-    const fs::path root = scratch_root();
-    fs::remove_all(root);
-    fs::create_directories(root);
-    f->data = root / "tiny";
-    synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), f->data.string());
-    f->model = root / "model";
-    fs::create_directories(f->model);
-    const std::string config = repo_file("configs/train/tiny.yaml");
-    fs::copy_file(config, f->model / "config.yaml");
-    write_model_folder(f->model.string(), config, f->data.string());
-    const TrainingConfig cfg = load_training_config(config);
-    const Character character = load_character((f->model / "character" / "character.yaml").string());
-    CaptureNetworks nets(character, cfg.network, cfg.seed);
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    weft::Tensor& bias = nets.pose_net->fc->bias;
-    for (int64_t k = 0; k < bias.numel(); ++k) bias.set({k}, u(rng));
-    weft::nn::save_weights((f->model / "model.safetensors").string(), nets);
-    static struct Cleanup {
-      ~Cleanup() {
-        std::error_code ec;
-        fs::remove_all(scratch_root(), ec);
-      }
-    } cleanup;
+    f->data = weft::capture::testing::tiny_dataset();
+    f->model = weft::capture::testing::shared_fixture("untrained_model", [&](const fs::path& dir) {
+      const std::string config = repo_file("configs/train/tiny.yaml");
+      fs::copy_file(config, dir / "config.yaml");
+      write_model_folder(dir.string(), config, f->data.string());
+      const TrainingConfig cfg = load_training_config(config);
+      const Character character = load_character((dir / "character" / "character.yaml").string());
+      CaptureNetworks nets(character, cfg.network, cfg.seed);
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<double> u(-1.0, 1.0);
+      weft::Tensor& bias = nets.pose_net->fc->bias;
+      for (int64_t k = 0; k < bias.numel(); ++k) bias.set({k}, u(rng));
+      weft::nn::save_weights((dir / "model.safetensors").string(), nets);
+    });
   }
   return *f;
 }

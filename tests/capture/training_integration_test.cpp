@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/io/openpose.h"
@@ -39,36 +40,51 @@ namespace {
 std::string weft_binary() { return std::string(WEFT_BINARY_DIR) + "/apps/weft"; }
 
 
-fs::path scratch_root() { return fs::temp_directory_path() / ("weft_training_test_" + std::to_string(::getpid())); }
+// This process's scratch folder, removed at exit.
+fs::path scratch_root() {
+  static const fs::path root = [] {
+    const fs::path r = fs::temp_directory_path() / ("weft_training_test_" + std::to_string(::getpid()));
+    fs::remove_all(r);
+    fs::create_directories(r);
+    return r;
+  }();
+  static struct Cleanup {
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(root, ec);
+    }
+  } cleanup;
+  return root;
+}
 
 struct Fixture {
-  fs::path data;       // the tiny dataset
-  fs::path reference;  // an uninterrupted run of configs/train/tiny.yaml
-  TrainSummary summary;
+  fs::path data;       // the tiny dataset (shared_fixture.h)
+  fs::path reference;  // an uninterrupted run of configs/train/tiny.yaml on it (shared too)
+  // What that run's TrainSummary said (kept in the fixture's summary.txt).
+  int simulation_windows = 0, simulation_failures = 0, validation_samples = 0;
+  double validation_iou = -1;
 };
 
-// Written once per test program, removed at exit.
+// The tiny dataset alone, for the tests that train nothing of the reference.
+fs::path tiny_data() { return weft::capture::testing::tiny_dataset(); }
+
 const Fixture& fixture() {
   static std::unique_ptr<Fixture> f;
   if (!f) {
     f = std::make_unique<Fixture>();
-    const fs::path root = scratch_root();
-    fs::remove_all(root);
-    fs::create_directories(root);
-    f->data = root / "tiny";
-    synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), f->data.string());
-    f->reference = root / "reference";
-    TrainOptions o;
-    o.config = repo_file("configs/train/tiny.yaml");
-    o.data = f->data.string();
-    o.run = f->reference.string();
-    f->summary = train(o);
-    static struct Cleanup {
-      ~Cleanup() {
-        std::error_code ec;
-        fs::remove_all(scratch_root(), ec);
-      }
-    } cleanup;
+    f->data = tiny_data();
+    f->reference = weft::capture::testing::shared_fixture("tiny_reference_run", [&](const fs::path& dir) {
+      TrainOptions o;
+      o.config = repo_file("configs/train/tiny.yaml");
+      o.data = f->data.string();
+      o.run = dir.string();
+      const TrainSummary s = train(o);
+      std::ofstream(dir / "summary.txt") << s.simulation_windows << " " << s.simulation_failures << " "
+                                         << s.last_validation.samples << " " << s.last_validation.silhouette_iou
+                                         << "\n";
+    });
+    std::ifstream(f->reference / "summary.txt") >> f->simulation_windows >> f->simulation_failures >>
+        f->validation_samples >> f->validation_iou;
   }
   return *f;
 }
@@ -90,7 +106,7 @@ double mean_total(const std::vector<LossRow>& rows, size_t first, size_t count) 
 // row for `kill_at` (or later). Returns the last step it had logged (−1: it ended first).
 int64_t run_and_kill(const fs::path& run, int64_t kill_at, bool resume) {
   const std::string bin = weft_binary(), config = repo_file("configs/train/tiny.yaml");
-  const std::string data = fixture().data.string(), out = run.string();
+  const std::string data = tiny_data().string(), out = run.string();
   const pid_t pid = ::fork();
   if (pid == 0) {
     const int null = ::open("/dev/null", O_WRONLY);
@@ -136,15 +152,15 @@ TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
     first += s.steps;
   }
   // The physics stage simulated windows and used some of them.
-  EXPECT_GT(f.summary.simulation_windows, 0);
-  EXPECT_LT(f.summary.simulation_failures, f.summary.simulation_windows);
+  EXPECT_GT(f.simulation_windows, 0);
+  EXPECT_LT(f.simulation_failures, f.simulation_windows);
   bool simulated = false;
   for (const LossRow& r : rows) simulated |= r.terms.count("simulation") > 0;
   EXPECT_TRUE(simulated) << "no step of the physics stage had a converged window";
   for (const char* file : {"losses.csv", "losses.png", "validation.csv", "config.yaml", "model.safetensors"})
     EXPECT_TRUE(fs::exists(f.reference / file)) << file;
-  EXPECT_GE(f.summary.last_validation.silhouette_iou, 0.0);
-  EXPECT_GT(f.summary.last_validation.samples, 0);
+  EXPECT_GE(f.validation_iou, 0.0);
+  EXPECT_GT(f.validation_samples, 0);
 }
 
 // A SIGKILL in the middle of each stage, then --resume (one run killed three times: in
@@ -179,7 +195,7 @@ TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
 TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
   SKIP_WITHOUT_HUMAN();
   const fs::path data = scratch_root() / "missing_file";
-  fs::copy(fixture().data, data, fs::copy_options::recursive);
+  fs::copy(tiny_data(), data, fs::copy_options::recursive);
   const fs::path gone = data / "keypoints" / "cam03" / "0002_keypoints.json";
   ASSERT_TRUE(fs::remove(gone));
   TrainOptions o;
@@ -200,7 +216,7 @@ TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
 TEST(Training, ANonFiniteLossStopsTheRunAndNeverReachesACheckpoint) {
   SKIP_WITHOUT_HUMAN();
   const fs::path data = scratch_root() / "absurd_keypoints";
-  fs::copy(fixture().data, data, fs::copy_options::recursive);
+  fs::copy(tiny_data(), data, fs::copy_options::recursive);
   TrainOptions o;
   o.config = repo_file("configs/train/tiny.yaml");
   o.data = data.string();
@@ -246,13 +262,13 @@ TEST(Training, ANonFiniteLossStopsTheRunAndNeverReachesACheckpoint) {
 // translation's accuracy from the noisy detections.
 TEST(CaptureModel, ExpressesTheGroundTruthPose) {
   SKIP_WITHOUT_HUMAN();
-  const Fixture& f = fixture();
-  const DatasetInfo info = read_dataset_info(f.data.string());
+  const fs::path data = tiny_data();
+  const DatasetInfo info = read_dataset_info(data.string());
   const Character ch = load_character(info.character);
   const TrainingConfig cfg = load_training_config(repo_file("configs/train/tiny.yaml"));
   const CaptureModel model(ch, cfg.network);
   const PoseParametrisation& param = model.parametrisation();
-  const Motion motion = read_motion((f.data / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
+  const Motion motion = read_motion((data / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
   const std::vector<int> frames = {0, 3, 5};
   const MultiviewSupervision sup(info, frames, 64);
   const Eigen::Matrix3d rest = forward_kinematics(ch.skeleton, ch.rest_dofs)[param.pivot_joint].linear();

@@ -1,0 +1,53 @@
+#pragma once
+// Folders several test processes share. ctest runs every test in a process of its own, so
+// a dataset or training run that many tests read would otherwise be remade by each. A
+// shared fixture is made once per build of the test program, under the build tree
+// (WEFT_BINARY_DIR/test_fixtures/<name>_<program>), behind a file lock; a stamp with the
+// program's modification time remakes it after a rebuild. Tests only read it.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+
+#include "capture/studio/synthetic_studio.h"
+#include "tests/capture/test_files.h"
+
+namespace weft::capture::testing {
+
+inline std::filesystem::path shared_fixture(const std::string& name,
+                                            const std::function<void(const std::filesystem::path&)>& make) {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const fs::path root = fs::path(WEFT_BINARY_DIR) / "test_fixtures";
+  fs::create_directories(root);
+  const fs::path dir = root / (name + "_" + exe.filename().string());
+  const int lock = ::open((dir.string() + ".lock").c_str(), O_CREAT | O_RDWR, 0644);
+  if (lock < 0 || ::flock(lock, LOCK_EX) != 0) throw weft::Error("cannot lock " + dir.string() + ".lock");
+  struct Unlock {
+    int fd;
+    ~Unlock() { ::flock(fd, LOCK_UN), ::close(fd); }
+  } unlock{lock};
+  std::ostringstream stamp;
+  stamp << exe.string() << " " << fs::last_write_time(exe).time_since_epoch().count() << "\n";
+  const fs::path marker = dir / ".weft_fixture";
+  if (fs::exists(marker) && slurp(marker) == stamp.str()) return dir;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  make(dir);
+  std::ofstream(marker, std::ios::binary) << stamp.str();
+  return dir;
+}
+
+// The tiny dataset (configs/synth/tiny.yaml).
+inline std::filesystem::path tiny_dataset() {
+  return shared_fixture("tiny", [](const std::filesystem::path& dir) {
+    synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), dir.string());
+  });
+}
+
+}  // namespace weft::capture::testing
