@@ -65,11 +65,10 @@ cv::Mat draw_meshes(const cv::Mat& image, const Camera& camera, const Character&
                     const Vertices* cloth) {
   cv::Mat out = image.clone();
   if (!in_front(camera, body)) return out;
-  std::vector<RenderMesh> meshes(1);
+  std::vector<RenderMesh> meshes(cloth ? 2 : 1);
   meshes[0].mesh = &ch.body.mesh;
   meshes[0].vertices = &body;
   if (cloth) {
-    meshes.emplace_back();
     meshes[1].mesh = &ch.cloth->mesh;
     meshes[1].vertices = cloth;
     meshes[1].part = 2;
@@ -188,7 +187,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   };
 
   std::vector<float> cloth_distances, body_distances;  // pooled over frames, for the 95th percentiles
-  Mean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv, oob_n, oob_rel, gt_oob_n, gt_oob_rel;
+  Mean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv;
+  Mean oob_n, oob_rel, gt_oob_n, gt_oob_rel, oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;
   double pen_sum = 0, gt_pen_sum = 0;
   int64_t inside = 0, gt_inside = 0, cloth_vertices = 0;
   Kept prev2, prev1;
@@ -245,21 +245,29 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
       e.gt_penetration_max_mm = nan_max(e.gt_penetration_max_mm, fe.gt_penetration_max_mm);
 
       // Out-of-balance force over frames f − 2, f − 1, f of one clip.
-      if (with_oob && prev2.id == f - 2 && prev1.id == f - 1 && same_segment(info, f - 2, f)) {
-        const physics::FrameMetrics r = cloth_out_of_balance(ch, simulation, e.fps, prev1.body, now.body,
-                                                             prev2.cloth, prev1.cloth, now.cloth);
-        const physics::FrameMetrics t = cloth_out_of_balance(ch, simulation, e.fps, prev1.gt_body, now.gt_body,
-                                                             prev2.gt_cloth, prev1.gt_cloth, now.gt_cloth);
-        fe.oob_mean_n = r.oob_force_mean, fe.oob_max_n = r.oob_force_max;
-        fe.oob_mean_rel = r.oob_force_mean_rel, fe.oob_max_rel = r.oob_force_max_rel;
-        fe.gt_oob_mean_n = t.oob_force_mean, fe.gt_oob_max_n = t.oob_force_max;
-        fe.gt_oob_mean_rel = t.oob_force_mean_rel, fe.gt_oob_max_rel = t.oob_force_max_rel;
+      if (with_oob && f >= 2 && prev2.id == f - 2 && prev1.id == f - 1 && same_segment(info, f - 2, f)) {
+        const ClothBalance r = cloth_out_of_balance(ch, simulation, e.fps, prev1.body, now.body, prev2.cloth,
+                                                    prev1.cloth, now.cloth);
+        const ClothBalance t = cloth_out_of_balance(ch, simulation, e.fps, prev1.gt_body, now.gt_body,
+                                                    prev2.gt_cloth, prev1.gt_cloth, now.gt_cloth);
+        fe.oob_mean_n = r.free.oob_force_mean, fe.oob_max_n = r.free.oob_force_max;
+        fe.oob_mean_rel = r.free.oob_force_mean_rel, fe.oob_max_rel = r.free.oob_force_max_rel;
+        fe.oob_all_mean_n = r.all.oob_force_mean, fe.oob_all_max_n = r.all.oob_force_max;
+        fe.gt_oob_mean_n = t.free.oob_force_mean, fe.gt_oob_max_n = t.free.oob_force_max;
+        fe.gt_oob_mean_rel = t.free.oob_force_mean_rel, fe.gt_oob_max_rel = t.free.oob_force_max_rel;
         ++e.oob_frames, ++e.gt_oob_frames;
-        oob_n.add(fe.oob_mean_n), oob_rel.add(fe.oob_mean_rel);
-        gt_oob_n.add(fe.gt_oob_mean_n), gt_oob_rel.add(fe.gt_oob_mean_rel);
-        e.oob_n.max = nan_max(e.oob_n.max, fe.oob_max_n), e.oob_rel.max = nan_max(e.oob_rel.max, fe.oob_max_rel);
-        e.gt_oob_n.max = nan_max(e.gt_oob_n.max, fe.gt_oob_max_n);
-        e.gt_oob_rel.max = nan_max(e.gt_oob_rel.max, fe.gt_oob_max_rel);
+        const auto add = [](Mean& mean, MetricSummary& s, double frame_mean, double frame_max) {
+          mean.add(frame_mean);
+          s.max = nan_max(s.max, frame_max);
+        };
+        add(oob_n, e.oob_n, r.free.oob_force_mean, r.free.oob_force_max);
+        add(oob_rel, e.oob_rel, r.free.oob_force_mean_rel, r.free.oob_force_max_rel);
+        add(gt_oob_n, e.gt_oob_n, t.free.oob_force_mean, t.free.oob_force_max);
+        add(gt_oob_rel, e.gt_oob_rel, t.free.oob_force_mean_rel, t.free.oob_force_max_rel);
+        add(oob_all_n, e.oob_all_n, r.all.oob_force_mean, r.all.oob_force_max);
+        add(oob_all_rel, e.oob_all_rel, r.all.oob_force_mean_rel, r.all.oob_force_max_rel);
+        add(gt_oob_all_n, e.gt_oob_all_n, t.all.oob_force_mean, t.all.oob_force_max);
+        add(gt_oob_all_rel, e.gt_oob_all_rel, t.all.oob_force_mean_rel, t.all.oob_force_max_rel);
       }
     }
 
@@ -307,6 +315,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   }
   e.oob_n.mean = oob_n.value(), e.oob_rel.mean = oob_rel.value();
   e.gt_oob_n.mean = gt_oob_n.value(), e.gt_oob_rel.mean = gt_oob_rel.value();
+  e.oob_all_n.mean = oob_all_n.value(), e.oob_all_rel.mean = oob_all_rel.value();
+  e.gt_oob_all_n.mean = gt_oob_all_n.value(), e.gt_oob_all_rel.mean = gt_oob_all_rel.value();
   e.amv_iou = amv.value(), e.rv_iou = rv.value(), e.sv_iou = sv.value();
 
   // Overlays of the worst and the median frame: by cloth error, else by the input view's IoU.

@@ -4,7 +4,8 @@
 // docs/DATASET.md) by the paper's metrics (docs/EVALUATION.md):
 // - out-of-balance force of every three consecutive predicted frames of one clip, mean
 //   and max over vertices and frames, in N and relative to a vertex's weight (needs the
-//   cloth material: a synth config's simulation section);
+//   cloth material: a synth config's simulation section), over the vertices the
+//   attachment does not hold and, for reference, over all of them;
 // - penetration of cloth vertices into the body: mean over the penetrating vertices and
 //   max, and the fraction of cloth vertices inside;
 // - silhouette IoU of the rendered body + cloth against the dataset's masks on every N-th
@@ -53,7 +54,9 @@ struct FrameEvaluation {
   double gt_penetration_mean_mm = kNotMeasured, gt_penetration_max_mm = kNotMeasured;
   double gt_penetration_depth_sum_mm = 0;
   int gt_penetrating_vertices = 0;
-  // Out-of-balance force (frames id − 2, id − 1, id predicted and in one clip).
+  // Out-of-balance force (frames id − 2, id − 1, id predicted and in one clip) over the
+  // vertices the attachment does not hold (frame_measures.h), and over all vertices.
+  double oob_all_mean_n = kNotMeasured, oob_all_max_n = kNotMeasured;
   double oob_mean_n = kNotMeasured, oob_max_n = kNotMeasured, oob_mean_rel = kNotMeasured,
          oob_max_rel = kNotMeasured;
   double gt_oob_mean_n = kNotMeasured, gt_oob_max_n = kNotMeasured, gt_oob_mean_rel = kNotMeasured,
@@ -90,6 +93,7 @@ struct CaptureEvaluation {
   // Summary (NaN where not measured).
   int oob_frames = 0, gt_oob_frames = 0;
   MetricSummary oob_n, oob_rel, gt_oob_n, gt_oob_rel;  // mean over vertices and frames, max
+  MetricSummary oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;  // the same, anchors included
   double penetration_mean_mm = kNotMeasured, penetration_max_mm = kNotMeasured,
          penetrating_fraction = kNotMeasured;
   double gt_penetration_mean_mm = kNotMeasured, gt_penetration_max_mm = kNotMeasured,

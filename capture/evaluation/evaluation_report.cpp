@@ -83,6 +83,15 @@ std::string CaptureEvaluation::to_json() const {
                                  {"max_n", gt_oob_n.max},
                                  {"mean_rel", gt_oob_rel.mean},
                                  {"max_rel", gt_oob_rel.max}}}};
+  s["out_of_balance_force_all_vertices"] = {{"mean_n", oob_all_n.mean},
+                                            {"max_n", oob_all_n.max},
+                                            {"mean_rel", oob_all_rel.mean},
+                                            {"max_rel", oob_all_rel.max},
+                                            {"ground_truth",
+                                             {{"mean_n", gt_oob_all_n.mean},
+                                              {"max_n", gt_oob_all_n.max},
+                                              {"mean_rel", gt_oob_all_rel.mean},
+                                              {"max_rel", gt_oob_all_rel.max}}}};
   s["penetration"] = {{"mean_cm", penetration_mean_mm / 10},
                       {"mean_mm", penetration_mean_mm},
                       {"max_mm", penetration_max_mm},
@@ -122,6 +131,8 @@ std::string CaptureEvaluation::to_json() const {
   p["oob_force_max_n"] = column(*this, [](const auto& f) { return f.oob_max_n; });
   p["oob_force_mean_rel"] = column(*this, [](const auto& f) { return f.oob_mean_rel; });
   p["oob_force_max_rel"] = column(*this, [](const auto& f) { return f.oob_max_rel; });
+  p["oob_force_all_vertices_mean_n"] = column(*this, [](const auto& f) { return f.oob_all_mean_n; });
+  p["oob_force_all_vertices_max_n"] = column(*this, [](const auto& f) { return f.oob_all_max_n; });
   p["gt_oob_force_mean_n"] = column(*this, [](const auto& f) { return f.gt_oob_mean_n; });
   p["gt_oob_force_max_n"] = column(*this, [](const auto& f) { return f.gt_oob_max_n; });
   p["amv_iou"] = column(*this, [](const auto& f) { return f.amv_iou; });
@@ -234,7 +245,9 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
        std::to_string(e.views.size()) + " views; " + std::to_string(e.frames.size()) + " captured frames; " +
        (e.options.gt_translation ? "<b>ground-truth global translation applied</b> (--gt-translation)"
                                  : "predicted global translation") +
-       "; IoU on every " + std::to_string(e.options.iou_every) + ". frame; cloth material from " +
+       (e.options.iou_every == 1 ? std::string("; IoU on every frame")
+                                 : fmt::format("; IoU on one frame in {}", e.options.iou_every)) +
+       "; cloth material from " +
        (e.synth_config.empty() ? std::string("— (none)") : "<code>" + escape(e.synth_config) + "</code>") +
        fmt::format("; {:.1f} s.</p>\n", e.seconds);
   for (const std::string& n : e.notes) h += "<p class=\"note\">" + escape(n) + "</p>\n";
@@ -244,10 +257,15 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   const auto row = [&](const std::string& name, const std::string& pred, const std::string& gt, const std::string& unit) {
     h += "<tr><td>" + name + "</td><td>" + pred + "</td><td>" + gt + "</td><td>" + unit + "</td></tr>\n";
   };
-  row(fmt::format("out-of-balance force, mean ({} frames)", e.oob_frames), sci(e.oob_n.mean), sci(e.gt_oob_n.mean), "N");
+  row(fmt::format("out-of-balance force (vertices the attachment does not hold), mean ({} frames)", e.oob_frames), sci(e.oob_n.mean), sci(e.gt_oob_n.mean), "N");
   row("out-of-balance force, max", sci(e.oob_n.max), sci(e.gt_oob_n.max), "N");
   row("out-of-balance force, mean, relative", sci(e.oob_rel.mean), sci(e.gt_oob_rel.mean), "× vertex weight");
   row("out-of-balance force, max, relative", sci(e.oob_rel.max), sci(e.gt_oob_rel.max), "× vertex weight");
+  row("out-of-balance force over all vertices (anchors pinned where predicted), mean", sci(e.oob_all_n.mean),
+      sci(e.gt_oob_all_n.mean), "N");
+  row("out-of-balance force over all vertices, max", sci(e.oob_all_n.max), sci(e.gt_oob_all_n.max), "N");
+  row("out-of-balance force over all vertices, mean, relative", sci(e.oob_all_rel.mean), sci(e.gt_oob_all_rel.mean),
+      "× vertex weight");
   row("penetration depth, mean over penetrating vertices", num(e.penetration_mean_mm / 10, 3),
       num(e.gt_penetration_mean_mm / 10, 3), "cm");
   row("penetration depth, max", num(e.penetration_max_mm, 2), num(e.gt_penetration_max_mm, 2), "mm");

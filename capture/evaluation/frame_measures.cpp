@@ -44,17 +44,20 @@ Penetration cloth_penetration(const Character& ch, const Vertices& body, const V
                           to_positions(cloth, ch.metres_per_unit));
 }
 
-physics::FrameMetrics cloth_out_of_balance(const Character& ch, const SynthSimulationConfig& simulation, double fps,
-                                           const Vertices& body_prev, const Vertices& body,
-                                           const Vertices& cloth_prev2, const Vertices& cloth_prev,
-                                           const Vertices& cloth) {
+ClothBalance cloth_out_of_balance(const Character& ch, const SynthSimulationConfig& simulation, double fps,
+                                  const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,
+                                  const Vertices& cloth_prev, const Vertices& cloth) {
   const double mpu = ch.metres_per_unit;
   // Pinned where predicted: the anchors' targets are the predicted anchors themselves.
   auto sim = make_garment_simulator(ch, simulation, fps, Eigen::MatrixX3d(body_prev * mpu),
                                     garment_pin_targets(ch, cloth));
   sim->body(0).set_vertices(Eigen::MatrixX3d(body * mpu));
-  return physics::frame_metrics(*sim, to_positions(cloth_prev2, mpu), to_positions(cloth_prev, mpu),
-                                to_positions(cloth, mpu), 1.0 / fps);
+  const physics::Positions x2 = to_positions(cloth_prev2, mpu), x1 = to_positions(cloth_prev, mpu),
+                           x = to_positions(cloth, mpu);
+  ClothBalance b;
+  physics::measure_out_of_balance(*sim, x2, x1, x, 1.0 / fps, b.all);
+  physics::measure_out_of_balance(*sim, x2, x1, x, 1.0 / fps, b.free, garment_pin_vertices(ch));
+  return b;
 }
 
 std::vector<double> silhouette_ious(const Character& ch, const Vertices& body, const Vertices* cloth,
