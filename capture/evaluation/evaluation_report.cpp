@@ -194,7 +194,8 @@ std::string svg_line_plot(const std::string& title, const std::string& unit, con
                " values for ", ids.size(), " frames");
     std::string run;
     int run_points = 0;
-    const auto flush = [&](size_t last) {
+    size_t last = 0;  // the run's last point
+    const auto flush = [&] {
       if (run_points == 1)
         svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n", X(ids[last]),
                            Y(s.values[last]), s.colour);
@@ -203,13 +204,16 @@ std::string svg_line_plot(const std::string& title, const std::string& unit, con
       run.clear(), run_points = 0;
     };
     for (size_t i = 0; i < ids.size(); ++i) {
-      // A gap at a missing value or a jump in frame ids.
-      if (!std::isfinite(s.values[i]) || (run_points && ids[i] != ids[i - 1] + 1)) flush(i - 1);
-      if (!std::isfinite(s.values[i])) continue;
+      if (!std::isfinite(s.values[i])) {
+        if (!s.connect_gaps) flush();
+        continue;
+      }
+      // A gap where captured frame ids jump.
+      if (run_points && ids[i] - ids[last] != int(i - last)) flush();
       run += fmt::format("{:.1f},{:.1f} ", X(ids[i]), Y(s.values[i]));
-      ++run_points;
+      ++run_points, last = i;
     }
-    if (!ids.empty()) flush(ids.size() - 1);
+    flush();
   }
   return svg + "</svg>\n";
 }
@@ -257,7 +261,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   const auto row = [&](const std::string& name, const std::string& pred, const std::string& gt, const std::string& unit) {
     h += "<tr><td>" + name + "</td><td>" + pred + "</td><td>" + gt + "</td><td>" + unit + "</td></tr>\n";
   };
-  row(fmt::format("out-of-balance force (vertices the attachment does not hold), mean ({} frames)", e.oob_frames), sci(e.oob_n.mean), sci(e.gt_oob_n.mean), "N");
+  row(fmt::format("out-of-balance force (vertices the attachment does not hold), mean (over {} frame{})", e.oob_frames,
+                 e.oob_frames == 1 ? "" : "s"), sci(e.oob_n.mean), sci(e.gt_oob_n.mean), "N");
   row("out-of-balance force, max", sci(e.oob_n.max), sci(e.gt_oob_n.max), "N");
   row("out-of-balance force, mean, relative", sci(e.oob_rel.mean), sci(e.gt_oob_rel.mean), "× vertex weight");
   row("out-of-balance force, max, relative", sci(e.oob_rel.max), sci(e.gt_oob_rel.max), "× vertex weight");
@@ -270,7 +275,7 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
       num(e.gt_penetration_mean_mm / 10, 3), "cm");
   row("penetration depth, max", num(e.penetration_max_mm, 2), num(e.gt_penetration_max_mm, 2), "mm");
   row("cloth vertices inside the body", num(100 * e.penetrating_fraction, 2), num(100 * e.gt_penetrating_fraction, 2), "%");
-  row(fmt::format("AMVIoU (all views, {} frames)", e.iou_frames), num(e.amv_iou, 4), "", "");
+  row(fmt::format("AMVIoU (all views, over {} frame{})", e.iou_frames, e.iou_frames == 1 ? "" : "s"), num(e.amv_iou, 4), "", "");
   row("RVIoU (all but the input view)", num(e.rv_iou, 4), "", "");
   row("SVIoU (the input view)", num(e.sv_iou, 4), "", "");
   row("cloth vertex error, mean", num(e.cloth_error_mean_mm, 2), "", "mm");
@@ -303,9 +308,9 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
                      {{"mean", col([](const auto& f) { return f.oob_mean_rel; }), "#1f77b4"},
                       {"max", col([](const auto& f) { return f.oob_max_rel; }), "#ff7f0e"}});
   h += svg_line_plot("Silhouette IoU", "IoU", ids,
-                     {{"AMV", col([](const auto& f) { return f.amv_iou; }), "#2ca02c"},
-                      {"RV", col([](const auto& f) { return f.rv_iou; }), "#17becf"},
-                      {"SV", col([](const auto& f) { return f.sv_iou; }), "#bcbd22"}});
+                     {{"AMV", col([](const auto& f) { return f.amv_iou; }), "#2ca02c", true},
+                      {"RV", col([](const auto& f) { return f.rv_iou; }), "#17becf", true},
+                      {"SV", col([](const auto& f) { return f.sv_iou; }), "#bcbd22", true}});
 
   h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
        "outline white) beside the ground truth drawn the same way (right).</p>\n";

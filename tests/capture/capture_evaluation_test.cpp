@@ -178,6 +178,10 @@ TEST(CaptureEvaluation, LinePlotDrawsEverySeriesWithGaps) {
   EXPECT_EQ(polylines, 2u);
   EXPECT_NE(svg.find("<circle"), std::string::npos);
   EXPECT_NE(svg.find(">error<"), std::string::npos);
+  // A series measured on every other frame is one line.
+  const std::string sampled = svg_line_plot("iou", "", {0, 1, 2, 3, 4}, {{"s", {0.5, NAN, 0.6, NAN, 0.7}, "red", true}});
+  EXPECT_EQ(sampled.find("<circle"), std::string::npos);
+  EXPECT_NE(sampled.find("<polyline"), std::string::npos);
 }
 
 namespace {
