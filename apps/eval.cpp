@@ -55,8 +55,8 @@ void add_eval_command(CLI::App& app) {
       "ground truth (a `weft synth` dataset) by the paper's metrics: out-of-balance force of the\n"
       "predicted cloth, penetration of cloth into the body, silhouette IoU over all views / the\n"
       "other views / the input view (AMVIoU, RVIoU, SVIoU), cloth and body vertex error and MPJPE.\n"
-      "Writes REPORT_DIR/metrics.json, report.html (viewable offline) and overlays of the worst\n"
-      "and median frames. Definitions and units: docs/EVALUATION.md.");
+      "Writes metrics.json, report.html (viewable offline) and overlays of the worst\n"
+      "and median frames into --out. Definitions and units: docs/EVALUATION.md.");
   cmd->add_option("--prediction", o->prediction,
                   "Capture folder written by `weft infer` (capture.json, meshes/, pose.motion)")
       ->required();
