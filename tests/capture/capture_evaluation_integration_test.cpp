@@ -55,7 +55,8 @@ const fs::path& tiny() {
 // A capture folder holding the dataset's ground truth for `frames`, every mesh, joint and
 // pivot moved by `offset` (character units).
 fs::path perfect_capture(const std::string& name, const std::vector<int>& frames,
-                         const Eigen::Vector3d& offset = Eigen::Vector3d::Zero()) {
+                         const Eigen::Vector3d& offset = Eigen::Vector3d::Zero(),
+                         const Eigen::Vector3d& cloth_offset = Eigen::Vector3d::Zero()) {
   const DatasetInfo info = read_dataset_info(tiny().string());
   const Character ch = load_character(info.character);
   const Motion gt = read_motion((tiny() / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
@@ -101,6 +102,7 @@ fs::path perfect_capture(const std::string& name, const std::vector<int>& frames
     for (const char* part : {"body", "cloth"}) {
       TriangleMesh mesh = read_ply((tiny() / "gt" / fmt::format("{}_{:04d}.ply", part, f)).string());
       mesh.V.rowwise() += offset.transpose();
+      if (std::string(part) == "cloth") mesh.V.rowwise() += cloth_offset.transpose();
       write_ply((dir / "meshes" / fmt::format("{}_{:04d}.ply", part, f)).string(), mesh);
     }
   }
@@ -216,6 +218,21 @@ TEST(CaptureEvaluationIntegration, GroundTruthTranslationTakesBackAGlobalShift) 
   EXPECT_NEAR(back.mpjpe_mm, 0.0, 1e-6);
   EXPECT_NEAR(back.pivot_error_mm, shift_mm, 1e-6);  // the error the shift took away
   EXPECT_GT(back.amv_iou, 0.99);
+}
+
+TEST(CaptureEvaluationIntegration, SkirtMovedIntoTheBodyPenetrates) {
+  // The skirt alone moved 3 cm sideways: its vertices on that side go into the hips and legs.
+  const fs::path capture = perfect_capture("into_body", {3, 4}, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.03, 0, 0));
+  const CaptureEvaluation e = evaluate_capture(options(capture));
+  EXPECT_NEAR(e.cloth_error_mean_mm, 30.0, 1e-6);
+  EXPECT_EQ(e.body_error_mean_mm, 0.0);
+  EXPECT_EQ(e.gt_penetration_max_mm, 0.0);
+  EXPECT_GT(e.penetrating_fraction, 0.01);
+  EXPECT_GT(e.penetration_mean_mm, 0.0);
+  EXPECT_LE(e.penetration_mean_mm, e.penetration_max_mm);
+  EXPECT_LT(e.penetration_max_mm, 30.0);  // no deeper than the move
+  std::printf("skirt moved 3 cm sideways: %.2f %% of its vertices inside, %.2f mm mean, %.2f mm max\n",
+              100 * e.penetrating_fraction, e.penetration_mean_mm, e.penetration_max_mm);
 }
 
 TEST(CaptureEvaluationIntegration, WithoutSynthConfigTheForceIsSkippedAndSaidSo) {
