@@ -27,7 +27,8 @@ void run_eval(const capture::EvaluationOptions& o, const std::string& out) {
   if (e.oob_frames)
     spdlog::info("out-of-balance force over {} frames: mean {:.4g} N ({:.3g} m g), max {:.4g} N ({:.3g} m g); "
                  "ground truth mean {:.4g} N, max {:.4g} N",
-                 e.oob_frames, e.oob_n.mean, e.oob_rel.mean, e.oob_n.max, e.oob_rel.max, e.gt_oob_n.mean, e.gt_oob_n.max);
+                 e.oob_frames, e.oob_n.mean, e.oob_rel.mean, e.oob_n.max, e.oob_rel.max, e.gt_oob_n.mean,
+                 e.gt_oob_n.max);
   if (e.has_cloth)
     spdlog::info("penetration: mean {:.3f} cm over penetrating vertices, max {:.2f} mm, {:.2f} % of cloth vertices "
                  "inside (ground truth {:.3f} cm, {:.2f} mm, {:.2f} %)",

@@ -91,9 +91,9 @@ cv::Mat draw_meshes(const cv::Mat& image, const Camera& camera, const Character&
 
 void caption(cv::Mat& image, const std::string& text) {
   const double scale = std::max(0.35, image.cols / 700.0);
-  cv::putText(image, text, {6, int(18 * scale + 4)}, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-  cv::putText(image, text, {6, int(18 * scale + 4)}, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 1,
-              cv::LINE_AA);
+  const cv::Point at(6, int(18 * scale + 4));
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
 }
 
 }  // namespace
@@ -163,8 +163,10 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
                " is not a frame of the dataset ", info.dir, " (frames 0..", info.frames - 1, ")");
   std::sort(order.begin(), order.end(), [&](int a, int b) { return cap.frames[a].id < cap.frames[b].id; });
   std::vector<int> failed;
-  for (int i : order)
-    if (std::count(info.failed_frames.begin(), info.failed_frames.end(), cap.frames[i].id)) failed.push_back(cap.frames[i].id);
+  for (int i : order) {
+    const int id = cap.frames[i].id;
+    if (std::count(info.failed_frames.begin(), info.failed_frames.end(), id)) failed.push_back(id);
+  }
   if (!failed.empty()) {
     e.notes.push_back(fmt::format("frames {} failed in the dataset's simulation: their ground-truth cloth is not "
                                   "in equilibrium",
@@ -299,7 +301,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     e.notes.push_back("out-of-balance force not measured: no three consecutive captured frames of one clip");
     spdlog::warn("{}", e.notes.back());
   }
-  if (info.views.size() == 1) e.notes.push_back("the dataset has one view: RVIoU (all but the input view) is undefined");
+  if (info.views.size() == 1)
+    e.notes.push_back("the dataset has one view: RVIoU (all but the input view) is undefined");
 
   e.pivot_error_mm = pivot_err.value();
   e.body_error_mean_mm = body_err.value();
@@ -332,7 +335,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     const int f = e.frames[k].id;
     const std::string image_path = dataset_image_path(info, f, e.view);
     const cv::Mat image = cv::imread(image_path, cv::IMREAD_COLOR);
-    WEFT_CHECK(!image.empty(), image_path, ": missing or unreadable (expected the input view's image of frame ", f, ")");
+    WEFT_CHECK(!image.empty(), image_path, ": missing or unreadable (expected the input view's image of frame ", f,
+               ")");
     const Camera& camera = camera_of(f, e.view);
     WEFT_CHECK(image.cols == camera.width && image.rows == camera.height, image_path, ": ", image.cols, "×",
                image.rows, " pixels, expected the camera's ", camera.width, "×", camera.height);
@@ -341,7 +345,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     const Vertices body = m.body.rowwise() + shift;
     const Vertices cloth = e.has_cloth ? Vertices(m.cloth.rowwise() + shift) : Vertices();
     const Vertices gt_body = read_gt_mesh(info, "body", f, int(ch.body.mesh.V.rows()), ch);
-    const Vertices gt_cloth = e.has_cloth ? read_gt_mesh(info, "cloth", f, int(ch.cloth->mesh.V.rows()), ch) : Vertices();
+    const Vertices gt_cloth =
+        e.has_cloth ? read_gt_mesh(info, "cloth", f, int(ch.cloth->mesh.V.rows()), ch) : Vertices();
     cv::Mat left = draw_meshes(image, camera, ch, body, e.has_cloth ? &cloth : nullptr);
     cv::Mat right = draw_meshes(image, camera, ch, gt_body, e.has_cloth ? &gt_cloth : nullptr);
     caption(left, fmt::format("prediction, frame {}", f));

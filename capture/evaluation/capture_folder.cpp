@@ -76,7 +76,8 @@ CaptureFolder read_capture_folder(const std::string& dir) {
   c.view = required_string(j, "view", where);
   c.fps = required_number(j, "fps", where);
   WEFT_CHECK(c.fps > 0, where, ": fps must be > 0, is ", c.fps);
-  c.collisions_resolved = required(j, "collisions_resolved", json::value_t::boolean, where, "true or false").get<bool>();
+  c.collisions_resolved =
+      required(j, "collisions_resolved", json::value_t::boolean, where, "true or false").get<bool>();
   const json& frames = required(j, "frames", json::value_t::array, where, "an array of frames");
   WEFT_CHECK(!frames.empty(), where, ": 'frames' is empty (expected at least one captured frame)");
   std::set<int> seen;

@@ -173,7 +173,8 @@ std::string svg_line_plot(const std::string& title, const std::string& unit, con
   const int xstep = std::max(1, int(tick_step(x1 - x0)));
   for (int id = (x0 / xstep) * xstep; id <= x1; id += xstep) {
     if (id < x0) continue;
-    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(id), H - bottom + 14, id);
+    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(id),
+                       H - bottom + 14, id);
   }
   svg += fmt::format(
       "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">frame</text>\n<text x=\"12\" y=\"{:.1f}\" "
@@ -200,7 +201,8 @@ std::string svg_line_plot(const std::string& title, const std::string& unit, con
         svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n", X(ids[last]),
                            Y(s.values[last]), s.colour);
       else if (run_points > 1)
-        svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n", s.colour, run);
+        svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
+                           s.colour, run);
       run.clear(), run_points = 0;
     };
     for (size_t i = 0; i < ids.size(); ++i) {
@@ -258,7 +260,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
 
   h += "<h2>Summary</h2>\n<table><tr><th>metric</th><th>prediction</th><th>ground truth (same measure)</th>"
        "<th>unit</th></tr>\n";
-  const auto row = [&](const std::string& name, const std::string& pred, const std::string& gt, const std::string& unit) {
+  const auto row = [&](const std::string& name, const std::string& pred, const std::string& gt,
+                       const std::string& unit) {
     h += "<tr><td>" + name + "</td><td>" + pred + "</td><td>" + gt + "</td><td>" + unit + "</td></tr>\n";
   };
   row(fmt::format("out-of-balance force (vertices the attachment does not hold), mean (over {} frame{})", e.oob_frames,
@@ -274,8 +277,10 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   row("penetration depth, mean over penetrating vertices", num(e.penetration_mean_mm / 10, 3),
       num(e.gt_penetration_mean_mm / 10, 3), "cm");
   row("penetration depth, max", num(e.penetration_max_mm, 2), num(e.gt_penetration_max_mm, 2), "mm");
-  row("cloth vertices inside the body", num(100 * e.penetrating_fraction, 2), num(100 * e.gt_penetrating_fraction, 2), "%");
-  row(fmt::format("AMVIoU (all views, over {} frame{})", e.iou_frames, e.iou_frames == 1 ? "" : "s"), num(e.amv_iou, 4), "", "");
+  row("cloth vertices inside the body", num(100 * e.penetrating_fraction, 2), num(100 * e.gt_penetrating_fraction, 2),
+      "%");
+  row(fmt::format("AMVIoU (all views, over {} frame{})", e.iou_frames, e.iou_frames == 1 ? "" : "s"),
+      num(e.amv_iou, 4), "", "");
   row("RVIoU (all but the input view)", num(e.rv_iou, 4), "", "");
   row("SVIoU (the input view)", num(e.sv_iou, 4), "", "");
   row("cloth vertex error, mean", num(e.cloth_error_mean_mm, 2), "", "mm");
@@ -315,8 +320,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
        "outline white) beside the ground truth drawn the same way (right).</p>\n";
   for (const EvaluationOverlay& o : e.overlays)
-    h += "<h3>" + escape(o.label) + " frame " + std::to_string(o.id) + " (" + escape(o.ranked_by) + ")</h3>\n<img src=\"" +
-         overlay_file(o) + "\" alt=\"" + escape(o.label) + " frame\">\n";
+    h += "<h3>" + escape(o.label) + " frame " + std::to_string(o.id) + " (" + escape(o.ranked_by) +
+         ")</h3>\n<img src=\"" + overlay_file(o) + "\" alt=\"" + escape(o.label) + " frame\">\n";
 
   h += "<h2>Per-frame table</h2>\n<table><tr><th>frame</th><th>cloth mm</th><th>body mm</th><th>MPJPE mm</th>"
        "<th>pivot mm</th><th>pen. mean mm</th><th>pen. max mm</th><th>OOB mean N</th><th>OOB max N</th>"

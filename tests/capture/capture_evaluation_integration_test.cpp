@@ -296,7 +296,8 @@ TEST(CaptureEvaluationIntegration, CommandWritesTheReport) {
   const fs::path capture = perfect_capture("command", {0, 1, 2, 3});
   const fs::path report = scratch_root() / "report_command";
   const std::string cmd = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " + capture.string() +
-                          " --data " + tiny().string() + " --out " + report.string() + " --view cam05 --iou-every 2 > " +
+                          " --data " + tiny().string() + " --out " + report.string() +
+                          " --view cam05 --iou-every 2 > " +
                           (scratch_root() / "eval.out").string() + " 2>&1";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(scratch_root() / "eval.out");

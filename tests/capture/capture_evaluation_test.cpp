@@ -179,7 +179,8 @@ TEST(CaptureEvaluation, LinePlotDrawsEverySeriesWithGaps) {
   EXPECT_NE(svg.find("<circle"), std::string::npos);
   EXPECT_NE(svg.find(">error<"), std::string::npos);
   // A series measured on every other frame is one line.
-  const std::string sampled = svg_line_plot("iou", "", {0, 1, 2, 3, 4}, {{"s", {0.5, NAN, 0.6, NAN, 0.7}, "red", true}});
+  const std::string sampled =
+      svg_line_plot("iou", "", {0, 1, 2, 3, 4}, {{"s", {0.5, NAN, 0.6, NAN, 0.7}, "red", true}});
   EXPECT_EQ(sampled.find("<circle"), std::string::npos);
   EXPECT_NE(sampled.find("<polyline"), std::string::npos);
 }
@@ -222,11 +223,13 @@ TEST(CaptureEvaluation, MalformedCaptureFoldersAreErrorsNamingTheFileAndKey) {
     expect_error([&] { read_capture_folder(dir.file("")); }, parts);
   };
   bad("{\"format\": ", {"capture.json", "invalid JSON"});
-  bad(with(kValidCapture, "weft-capture/1", "weft-capture/2"), {"capture.json", "weft-capture/2", "expected 'weft-capture/1'"});
+  bad(with(kValidCapture, "weft-capture/1", "weft-capture/2"),
+      {"capture.json", "weft-capture/2", "expected 'weft-capture/1'"});
   bad(with(kValidCapture, "\"view\": \"cam03\",", ""), {"capture.json", "missing key 'view'"});
   bad(with(kValidCapture, "\"fps\": 30", "\"fps\": \"30\""), {"capture.json", "'fps'", "expected a number"});
   bad(with(kValidCapture, "\"id\": 6", "\"id\": 5"), {"capture.json", "frames[1]", "id 5 appears twice"});
   bad(with(kValidCapture, "[0.1, 0.9, 0.0]", "[0.1, 0.9]"), {"capture.json", "frames[0]", "pivot has 2 values"});
   bad(with(kValidCapture, "\"id\": 5, ", ""), {"capture.json", "frames[0]", "missing key 'id'"});
-  bad(with(kValidCapture, "\"frames\": [", "\"frames\": 3, \"x\": ["), {"capture.json", "'frames'", "expected an array"});
+  bad(with(kValidCapture, "\"frames\": [", "\"frames\": 3, \"x\": ["),
+      {"capture.json", "'frames'", "expected an array"});
 }
