@@ -3,6 +3,7 @@
 // REPORT_DIR/metrics.json, report.html and the overlays.
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -34,8 +35,8 @@ void run_eval(const capture::EvaluationOptions& o, const std::string& out) {
                  "inside (ground truth {:.3f} cm, {:.2f} mm, {:.2f} %)",
                  e.penetration_mean_mm / 10, e.penetration_max_mm, 100 * e.penetrating_fraction,
                  e.gt_penetration_mean_mm / 10, e.gt_penetration_max_mm, 100 * e.gt_penetrating_fraction);
-  spdlog::info("silhouette IoU over {} frames: AMVIoU {:.4f}, RVIoU {:.4f}, SVIoU {:.4f}", e.iou_frames, e.amv_iou,
-               e.rv_iou, e.sv_iou);
+  spdlog::info("silhouette IoU over {} frames: AMVIoU {:.4f}, RVIoU {}, SVIoU {:.4f}", e.iou_frames, e.amv_iou,
+               std::isfinite(e.rv_iou) ? fmt::format("{:.4f}", e.rv_iou) : "undefined (one view)", e.sv_iou);
   spdlog::info("3D error: cloth {:.2f} mm mean, {:.2f} mm p95; body {:.2f} mm mean, {:.2f} mm p95; MPJPE {:.2f} mm; "
                "pivot {:.2f} mm",
                e.cloth_error_mean_mm, e.cloth_error_p95_mm, e.body_error_mean_mm, e.body_error_p95_mm, e.mpjpe_mm,

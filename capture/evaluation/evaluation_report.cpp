@@ -222,6 +222,13 @@ std::string svg_line_plot(const std::string& title, const std::string& unit, con
 
 std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, const std::string& dir) {
   fs::create_directories(dir);
+  // Overlays of an earlier report in this folder would be left beside this one's.
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    const bool current = std::any_of(e.overlays.begin(), e.overlays.end(),
+                                     [&](const EvaluationOverlay& o) { return overlay_file(o) == name; });
+    if (name.rfind("overlay_", 0) == 0 && entry.path().extension() == ".png" && !current) fs::remove(entry.path());
+  }
   std::vector<std::string> written;
   const auto write_text = [&](const std::string& name, const std::string& text) {
     const std::string path = (fs::path(dir) / name).string();

@@ -173,7 +173,10 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
 
   // The report: every metric present.
   const fs::path report = scratch_root() / "report_perfect";
+  fs::create_directories(report);
+  std::ofstream(report / "overlay_worst_0099.png") << "an earlier report's";
   const std::vector<std::string> written = write_evaluation_report(e, report.string());
+  EXPECT_FALSE(fs::exists(report / "overlay_worst_0099.png"));
   EXPECT_EQ(written.size(), 4u);  // two overlays, metrics.json, report.html
   const nlohmann::json j = nlohmann::json::parse(slurp(report / "metrics.json"));
   const nlohmann::json& s = j["summary"];
