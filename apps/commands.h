@@ -16,5 +16,6 @@ void add_synth_command(CLI::App& app);
 void add_train_command(CLI::App& app);
 void add_infer_command(CLI::App& app);
 void add_adapt_command(CLI::App& app);
+void add_eval_command(CLI::App& app);
 
 }  // namespace weft::apps

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   weft::apps::add_train_command(app);
   weft::apps::add_infer_command(app);
   weft::apps::add_adapt_command(app);
+  weft::apps::add_eval_command(app);
   weft::apps::add_nn_command(app);
   weft::apps::add_bench_command(app);
   // WEFT_PROFILE=1: the per-op time table goes to stderr when the command ends.

@@ -26,7 +26,18 @@ void measure_penetration(const ClothSimulator& sim, const Positions& x, FrameMet
 void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
                             const Positions& x_prev, const Positions& x, double h,
                             FrameMetrics& m) {
+  measure_out_of_balance(sim, x_prev2, x_prev, x, h, m, {});
+}
+
+void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
+                            const Positions& x_prev, const Positions& x, double h,
+                            FrameMetrics& m, const std::vector<int>& excluded) {
   const int n = sim.mesh().num_vertices();
+  std::vector<char> skip(n, 0);
+  for (int i : excluded) {
+    WEFT_CHECK(i >= 0 && i < n, "metrics: excluded vertex ", i, " is not in 0..", n - 1);
+    skip[i] = 1;
+  }
   WEFT_CHECK(x.size() == 3 * n && x_prev.size() == x.size() && x_prev2.size() == x.size(),
              "metrics: frames must have ", 3 * n, " entries");
   WEFT_CHECK(h > 0, "metrics: time step must be > 0 s, got ", h);
@@ -34,8 +45,11 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
   const Positions a = (x - 2.0 * x_prev + x_prev2) / (h * h);
   const double g = sim.settings().gravity.norm();
   double sum = 0, sum_rel = 0;
+  int counted = 0;
   m.oob_force_max = m.oob_force_max_rel = 0;
   for (int i = 0; i < n; ++i) {
+    if (skip[i]) continue;
+    ++counted;
     const double mass = sim.mesh().mass[i];
     const double r = (mass * a.segment<3>(3 * i) - f.segment<3>(3 * i)).norm();
     const double rel = g > 0 ? r / (mass * g) : 0.0;
@@ -44,8 +58,8 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
     m.oob_force_max = std::max(m.oob_force_max, r);
     m.oob_force_max_rel = std::max(m.oob_force_max_rel, rel);
   }
-  m.oob_force_mean = sum / n;
-  m.oob_force_mean_rel = sum_rel / n;
+  m.oob_force_mean = counted ? sum / counted : 0.0;
+  m.oob_force_mean_rel = counted ? sum_rel / counted : 0.0;
 }
 
 FrameMetrics frame_metrics(const ClothSimulator& sim, const Positions& x_prev2,

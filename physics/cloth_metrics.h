@@ -29,6 +29,11 @@ void measure_penetration(const ClothSimulator& sim, const Positions& x, FrameMet
 void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
                             const Positions& x_prev, const Positions& x, double h,
                             FrameMetrics& m);
+// The same over every vertex but `excluded` (e.g. vertices held by an attachment whose
+// reaction force is not modelled); every vertex excluded gives zeros.
+void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
+                            const Positions& x_prev, const Positions& x, double h,
+                            FrameMetrics& m, const std::vector<int>& excluded);
 
 // Both of the above.
 FrameMetrics frame_metrics(const ClothSimulator& sim, const Positions& x_prev2,

@@ -116,6 +116,15 @@ TEST(Simulator, HangingClothSettlesToEquilibrium) {
   EXPECT_LT(sim.total_force(r.x).lpNorm<Eigen::Infinity>(), 1e-3 * weight);
   // It hangs: the free edge fell well below the pinned one.
   EXPECT_LT(r.x[3 * (n * n - 1) + 1], 0.7);
+  // Pinned where they hang (no pin force), the two corners carry the cloth's weight: far
+  // out of balance when measured, in balance when left out as held by a support.
+  sim.set_pins({0, n - 1}, {r.x.segment<3>(0), r.x.segment<3>(3 * (n - 1))});
+  FrameMetrics all, held;
+  measure_out_of_balance(sim, x2, x1, r.x, h, all);
+  measure_out_of_balance(sim, x2, x1, r.x, h, held, {0, n - 1});
+  EXPECT_GT(all.oob_force_max_rel, 10);
+  EXPECT_LT(held.oob_force_max_rel, 1e-3);
+  EXPECT_LT(held.oob_force_mean, all.oob_force_mean);
 }
 
 TEST(Simulator, ClothDroppedOnSphereNeverPenetrates) {

@@ -1,0 +1,366 @@
+#include "capture/evaluation/capture_evaluation.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numeric>
+
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/evaluation/capture_folder.h"
+#include "capture/evaluation/frame_measures.h"
+#include "capture/io/mesh_io.h"
+#include "capture/render/renderer.h"
+#include "capture/training/capture_networks.h"
+#include "capture/training/multiview_losses.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Means of measured (finite) values.
+struct Mean {
+  double sum = 0;
+  int64_t n = 0;
+  void add(double x, int64_t count = 1) {
+    if (std::isfinite(x)) sum += x * count, n += count;
+  }
+  double value() const { return n ? sum / n : kNotMeasured; }
+};
+
+double nan_max(double a, double b) { return std::isnan(a) ? b : std::isnan(b) ? a : std::max(a, b); }
+
+// A ground-truth mesh of the dataset, checked against the template.
+Vertices read_gt_mesh(const DatasetInfo& info, const std::string& name, int frame, int vertices,
+                      const Character& ch) {
+  const fs::path path = fs::path(info.dir) / "gt" / fmt::format("{}_{:04d}.ply", name, frame);
+  WEFT_CHECK(fs::exists(path), path.string(), ": missing (expected the ground-truth ", name, " of frame ", frame, ")");
+  const TriangleMesh m = read_ply(path.string());
+  WEFT_CHECK(m.V.rows() == vertices, path.string(), ": ", m.V.rows(), " vertices, expected ", vertices, " (the ",
+             name, " of ", ch.source, ": the capture's character is not the dataset's)");
+  return m.V;
+}
+
+// The frame's prediction or ground truth, kept for the out-of-balance force of the frames after it.
+struct Kept {
+  int id = -1;
+  Vertices body, cloth, gt_body, gt_cloth;
+};
+
+// Draws the body (blue) and cloth (orange) translucently over `image`, outlined in white.
+cv::Mat draw_meshes(const cv::Mat& image, const Camera& camera, const Character& ch, const Vertices& body,
+                    const Vertices* cloth) {
+  cv::Mat out = image.clone();
+  if (!in_front(camera, body)) return out;
+  std::vector<RenderMesh> meshes(cloth ? 2 : 1);
+  meshes[0].mesh = &ch.body.mesh;
+  meshes[0].vertices = &body;
+  if (cloth) {
+    meshes[1].mesh = &ch.cloth->mesh;
+    meshes[1].vertices = cloth;
+    meshes[1].part = 2;
+  }
+  const RenderResult r = render(camera, meshes);
+  const cv::Vec3b body_bgr(230, 140, 40), cloth_bgr(20, 140, 255);
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x) {
+      const uchar part = r.parts.at<uchar>(y, x);
+      if (!part) continue;
+      const cv::Vec3b c = part == 2 ? cloth_bgr : body_bgr;
+      cv::Vec3b& p = out.at<cv::Vec3b>(y, x);
+      for (int k = 0; k < 3; ++k) p[k] = cv::saturate_cast<uchar>(0.45 * p[k] + 0.55 * c[k]);
+    }
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(r.mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  cv::drawContours(out, contours, -1, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return out;
+}
+
+void caption(cv::Mat& image, const std::string& text) {
+  const double scale = std::max(0.35, image.cols / 700.0);
+  const cv::Point at(6, int(18 * scale + 4));
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::function<void(int, int)>& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  WEFT_CHECK(o.iou_every >= 1, "--iou-every must be ≥ 1, is ", o.iou_every);
+  const CaptureFolder cap = read_capture_folder(o.prediction);
+  const std::string cap_json = (fs::path(cap.dir) / "capture.json").string();
+  const DatasetInfo info = read_dataset_info(o.data);
+  const std::string info_yaml = (fs::path(info.dir) / "dataset.yaml").string();
+
+  CaptureEvaluation e;
+  e.options = o;
+  e.views = info.views;
+  e.view = o.view.empty() ? cap.view : o.view;
+  const auto view_it = std::find(info.views.begin(), info.views.end(), e.view);
+  WEFT_CHECK(view_it != info.views.end(), "the input view '", e.view, "' (",
+             o.view.empty() ? cap_json + "'s \"view\"" : std::string("--view"), ") is not a view of ", info_yaml,
+             " (views: ", fmt::format("{}", fmt::join(info.views, ", ")), "); pass --view with one of them");
+  const int input_view = int(view_it - info.views.begin());
+
+  WEFT_CHECK(fs::exists(cap.character), cap_json, ": character '", cap.character, "' does not exist");
+  const Character ch = load_character(cap.character);
+  e.character = cap.character;
+  e.has_cloth = ch.has_cloth();
+  const double mpu = ch.metres_per_unit;
+  e.metres_per_unit = mpu;
+  WEFT_CHECK(std::abs(cap.metres_per_unit - mpu) <= 1e-9 * mpu, cap_json, ": metres_per_unit ", cap.metres_per_unit,
+             " differs from the character's ", mpu, " (", cap.character, ")");
+  WEFT_CHECK(std::abs(info.metres_per_unit - mpu) <= 1e-9 * mpu, info_yaml, ": metres_per_unit ",
+             info.metres_per_unit, " differs from the captured character's ", mpu, " (", cap.character, ")");
+  // Frame ids are the dataset's: one frame lasts 1/fps of the dataset.
+  e.fps = info.fps;
+  if (std::abs(cap.fps - info.fps) > 1e-9 * info.fps) {
+    e.notes.push_back(fmt::format("capture.json's fps {} differs from the dataset's {}: accelerations use the "
+                                  "dataset's (frame ids are the dataset's frames)",
+                                  cap.fps, info.fps));
+    spdlog::warn("{}", e.notes.back());
+  }
+
+  // The cloth material for the out-of-balance force.
+  SynthSimulationConfig simulation;
+  bool with_oob = false;
+  if (e.has_cloth) {
+    const std::string path = o.synth_config.empty() ? cap.synth_config : o.synth_config;
+    if (path.empty()) {
+      e.notes.push_back("out-of-balance force not measured: no synth config gives the cloth material (capture.json's "
+                        "synth_config is empty; pass --synth-config)");
+      spdlog::warn("{}", e.notes.back());
+    } else {
+      WEFT_CHECK(fs::exists(path), path, ": no such synth config (from ",
+                 o.synth_config.empty() ? cap_json + "'s synth_config" : std::string("--synth-config"), ")");
+      simulation = load_synth_config(path).simulation;
+      e.synth_config = path;
+      with_oob = true;
+    }
+  } else {
+    e.notes.push_back("the character has no garment: cloth error, penetration and out-of-balance force not measured");
+  }
+
+  // Frames in id order, each a frame of the dataset.
+  std::vector<int> order(cap.frames.size());
+  std::iota(order.begin(), order.end(), 0);
+  for (int i : order)
+    WEFT_CHECK(cap.frames[i].id < info.frames, cap_json, ": frames[", i, "]: id ", cap.frames[i].id,
+               " is not a frame of the dataset ", info.dir, " (frames 0..", info.frames - 1, ")");
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return cap.frames[a].id < cap.frames[b].id; });
+  std::vector<int> failed;
+  for (int i : order) {
+    const int id = cap.frames[i].id;
+    if (std::count(info.failed_frames.begin(), info.failed_frames.end(), id)) failed.push_back(id);
+  }
+  if (!failed.empty()) {
+    e.notes.push_back(fmt::format("frames {} failed in the dataset's simulation: their ground-truth cloth is not "
+                                  "in equilibrium",
+                                  fmt::join(failed, ", ")));
+    spdlog::warn("{}", e.notes.back());
+  }
+
+  const Eigen::MatrixXd dofs = read_captured_dofs(cap, ch);
+  const std::string gt_motion_path = (fs::path(info.dir) / "gt" / "pose.motion").string();
+  const Motion gt_motion = read_motion(gt_motion_path, int(ch.rest_dofs.size()));
+  const PoseParametrisation param = pose_parametrisation(ch);
+  const std::string cameras_path = (fs::path(info.dir) / "cameras.yaml").string();
+  std::map<std::string, Camera> cameras;
+  for (const Camera& c : read_cameras_yaml(cameras_path)) cameras[c.name] = c;
+  const auto camera_of = [&](int frame, const std::string& view) -> const Camera& {
+    const std::string name = dataset_camera_name(info, frame, view);
+    const auto it = cameras.find(name);
+    WEFT_CHECK(it != cameras.end(), cameras_path, ": no camera '", name, "'");
+    return it->second;
+  };
+
+  std::vector<float> cloth_distances, body_distances;  // pooled over frames, for the 95th percentiles
+  Mean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv;
+  Mean oob_n, oob_rel, gt_oob_n, gt_oob_rel, oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;
+  double pen_sum = 0, gt_pen_sum = 0;
+  int64_t inside = 0, gt_inside = 0, cloth_vertices = 0;
+  Kept prev2, prev1;
+  const int total = int(order.size());
+  for (int k = 0; k < total; ++k) {
+    const CapturedFrame& cf = cap.frames[order[k]];
+    const int f = cf.id;
+    FrameEvaluation fe;
+    fe.id = f;
+    WEFT_CHECK(f < gt_motion.num_frames(), gt_motion_path, ": no row for frame ", f);
+    const PosedCharacter gt_pose = pose_character(ch, gt_motion.dofs.row(f).transpose());
+    const Eigen::Vector3d gt_pivot = gt_pose.joints[param.pivot_joint].translation();
+    fe.pivot_error_mm = (cf.pivot - gt_pivot).norm() * mpu * 1e3;
+    if (o.gt_translation) fe.shift = gt_pivot - cf.pivot;
+    const Eigen::RowVector3d shift = fe.shift.transpose();
+
+    Kept now;
+    now.id = f;
+    CapturedMeshes m = read_captured_meshes(cap, f, ch);
+    now.body = m.body.rowwise() + shift;
+    if (e.has_cloth) now.cloth = m.cloth.rowwise() + shift;
+    const Vertices body25 = pose_character(ch, dofs.row(order[k]).transpose()).body25.rowwise() + shift;
+    now.gt_body = read_gt_mesh(info, "body", f, int(ch.body.mesh.V.rows()), ch);
+    if (e.has_cloth) now.gt_cloth = read_gt_mesh(info, "cloth", f, int(ch.cloth->mesh.V.rows()), ch);
+
+    // 3D error.
+    const std::vector<double> bd = vertex_distances_mm(now.body, now.gt_body, mpu);
+    fe.body_error_mean_mm = std::accumulate(bd.begin(), bd.end(), 0.0) / bd.size();
+    fe.body_error_p95_mm = quantile(bd, 0.95);
+    body_distances.insert(body_distances.end(), bd.begin(), bd.end());
+    fe.mpjpe_mm = mean_joint_error_mm(body25, gt_pose.body25, mpu);
+    pivot_err.add(fe.pivot_error_mm), body_err.add(fe.body_error_mean_mm), mpjpe.add(fe.mpjpe_mm);
+    if (e.has_cloth) {
+      const std::vector<double> cd = vertex_distances_mm(now.cloth, now.gt_cloth, mpu);
+      fe.cloth_error_mean_mm = std::accumulate(cd.begin(), cd.end(), 0.0) / cd.size();
+      fe.cloth_error_p95_mm = quantile(cd, 0.95);
+      cloth_distances.insert(cloth_distances.end(), cd.begin(), cd.end());
+      cloth_err.add(fe.cloth_error_mean_mm);
+
+      // Penetration, of the prediction and of the ground truth.
+      const Penetration p = cloth_penetration(ch, now.body, now.cloth);
+      const Penetration g = cloth_penetration(ch, now.gt_body, now.gt_cloth);
+      fe.cloth_vertices = int(now.cloth.rows());
+      fe.penetrating_vertices = p.vertices_inside, fe.penetration_depth_sum_mm = p.depth_sum * 1e3;
+      fe.penetration_mean_mm = p.vertices_inside ? p.depth_sum * 1e3 / p.vertices_inside : 0.0;
+      fe.penetration_max_mm = p.max_depth * 1e3;
+      fe.gt_penetrating_vertices = g.vertices_inside, fe.gt_penetration_depth_sum_mm = g.depth_sum * 1e3;
+      fe.gt_penetration_mean_mm = g.vertices_inside ? g.depth_sum * 1e3 / g.vertices_inside : 0.0;
+      fe.gt_penetration_max_mm = g.max_depth * 1e3;
+      pen_sum += fe.penetration_depth_sum_mm, inside += p.vertices_inside;
+      gt_pen_sum += fe.gt_penetration_depth_sum_mm, gt_inside += g.vertices_inside;
+      cloth_vertices += fe.cloth_vertices;
+      e.penetration_max_mm = nan_max(e.penetration_max_mm, fe.penetration_max_mm);
+      e.gt_penetration_max_mm = nan_max(e.gt_penetration_max_mm, fe.gt_penetration_max_mm);
+
+      // Out-of-balance force over frames f − 2, f − 1, f of one clip.
+      if (with_oob && f >= 2 && prev2.id == f - 2 && prev1.id == f - 1 && same_segment(info, f - 2, f)) {
+        const ClothBalance r = cloth_out_of_balance(ch, simulation, e.fps, prev1.body, now.body, prev2.cloth,
+                                                    prev1.cloth, now.cloth);
+        const ClothBalance t = cloth_out_of_balance(ch, simulation, e.fps, prev1.gt_body, now.gt_body,
+                                                    prev2.gt_cloth, prev1.gt_cloth, now.gt_cloth);
+        fe.oob_mean_n = r.free.oob_force_mean, fe.oob_max_n = r.free.oob_force_max;
+        fe.oob_mean_rel = r.free.oob_force_mean_rel, fe.oob_max_rel = r.free.oob_force_max_rel;
+        fe.oob_all_mean_n = r.all.oob_force_mean, fe.oob_all_max_n = r.all.oob_force_max;
+        fe.gt_oob_mean_n = t.free.oob_force_mean, fe.gt_oob_max_n = t.free.oob_force_max;
+        fe.gt_oob_mean_rel = t.free.oob_force_mean_rel, fe.gt_oob_max_rel = t.free.oob_force_max_rel;
+        ++e.oob_frames, ++e.gt_oob_frames;
+        const auto add = [](Mean& mean, MetricSummary& s, double frame_mean, double frame_max) {
+          mean.add(frame_mean);
+          s.max = nan_max(s.max, frame_max);
+        };
+        add(oob_n, e.oob_n, r.free.oob_force_mean, r.free.oob_force_max);
+        add(oob_rel, e.oob_rel, r.free.oob_force_mean_rel, r.free.oob_force_max_rel);
+        add(gt_oob_n, e.gt_oob_n, t.free.oob_force_mean, t.free.oob_force_max);
+        add(gt_oob_rel, e.gt_oob_rel, t.free.oob_force_mean_rel, t.free.oob_force_max_rel);
+        add(oob_all_n, e.oob_all_n, r.all.oob_force_mean, r.all.oob_force_max);
+        add(oob_all_rel, e.oob_all_rel, r.all.oob_force_mean_rel, r.all.oob_force_max_rel);
+        add(gt_oob_all_n, e.gt_oob_all_n, t.all.oob_force_mean, t.all.oob_force_max);
+        add(gt_oob_all_rel, e.gt_oob_all_rel, t.all.oob_force_mean_rel, t.all.oob_force_max_rel);
+      }
+    }
+
+    // Silhouette IoU on every N-th frame, every view.
+    if (k % o.iou_every == 0) {
+      std::vector<Camera> cams;
+      std::vector<cv::Mat> masks;
+      for (const std::string& v : info.views) {
+        cams.push_back(camera_of(f, v));
+        masks.push_back(read_dataset_mask(info, f, v));
+      }
+      fe.iou = silhouette_ious(ch, now.body, e.has_cloth ? &now.cloth : nullptr, cams, masks);
+      Mean all, rest;
+      for (size_t v = 0; v < fe.iou.size(); ++v) {
+        all.add(fe.iou[v]);
+        if (int(v) != input_view) rest.add(fe.iou[v]);
+      }
+      fe.amv_iou = all.value(), fe.rv_iou = rest.value(), fe.sv_iou = fe.iou[input_view];
+      amv.add(fe.amv_iou), rv.add(fe.rv_iou), sv.add(fe.sv_iou);
+      ++e.iou_frames;
+    }
+
+    e.frames.push_back(std::move(fe));
+    prev2 = std::move(prev1);
+    prev1 = std::move(now);
+    if (progress) progress(k + 1, total);
+  }
+  if (with_oob && e.oob_frames == 0) {
+    e.notes.push_back("out-of-balance force not measured: no three consecutive captured frames of one clip");
+    spdlog::warn("{}", e.notes.back());
+  }
+  if (info.views.size() == 1)
+    e.notes.push_back("the dataset has one view: RVIoU (all but the input view) is undefined");
+
+  e.pivot_error_mm = pivot_err.value();
+  e.body_error_mean_mm = body_err.value();
+  e.body_error_p95_mm = quantile(std::vector<double>(body_distances.begin(), body_distances.end()), 0.95);
+  e.mpjpe_mm = mpjpe.value();
+  if (e.has_cloth) {
+    e.cloth_error_mean_mm = cloth_err.value();
+    e.cloth_error_p95_mm = quantile(std::vector<double>(cloth_distances.begin(), cloth_distances.end()), 0.95);
+    e.penetration_mean_mm = inside ? pen_sum / inside : 0.0;
+    e.gt_penetration_mean_mm = gt_inside ? gt_pen_sum / gt_inside : 0.0;
+    e.penetrating_fraction = double(inside) / cloth_vertices;
+    e.gt_penetrating_fraction = double(gt_inside) / cloth_vertices;
+  }
+  e.oob_n.mean = oob_n.value(), e.oob_rel.mean = oob_rel.value();
+  e.gt_oob_n.mean = gt_oob_n.value(), e.gt_oob_rel.mean = gt_oob_rel.value();
+  e.oob_all_n.mean = oob_all_n.value(), e.oob_all_rel.mean = oob_all_rel.value();
+  e.gt_oob_all_n.mean = gt_oob_all_n.value(), e.gt_oob_all_rel.mean = gt_oob_all_rel.value();
+  e.amv_iou = amv.value(), e.rv_iou = rv.value(), e.sv_iou = sv.value();
+
+  // Overlays of the worst and the median frame: by cloth error, else by the input view's IoU.
+  std::vector<int> ranked;
+  for (int k = 0; k < total; ++k)
+    if (e.has_cloth || std::isfinite(e.frames[k].sv_iou)) ranked.push_back(k);
+  const auto score = [&](int k) { return e.has_cloth ? e.frames[k].cloth_error_mean_mm : -e.frames[k].sv_iou; };
+  std::stable_sort(ranked.begin(), ranked.end(), [&](int a, int b) { return score(a) > score(b); });
+  std::vector<std::pair<std::string, int>> picks;
+  if (!ranked.empty()) picks.push_back({"worst", ranked.front()});
+  if (ranked.size() > 1) picks.push_back({"median", ranked[ranked.size() / 2]});
+  for (const auto& [label, k] : picks) {
+    const int f = e.frames[k].id;
+    const std::string image_path = dataset_image_path(info, f, e.view);
+    const cv::Mat image = cv::imread(image_path, cv::IMREAD_COLOR);
+    WEFT_CHECK(!image.empty(), image_path, ": missing or unreadable (expected the input view's image of frame ", f,
+               ")");
+    const Camera& camera = camera_of(f, e.view);
+    WEFT_CHECK(image.cols == camera.width && image.rows == camera.height, image_path, ": ", image.cols, "×",
+               image.rows, " pixels, expected the camera's ", camera.width, "×", camera.height);
+    const Eigen::RowVector3d shift = e.frames[k].shift.transpose();
+    const CapturedMeshes m = read_captured_meshes(cap, f, ch);
+    const Vertices body = m.body.rowwise() + shift;
+    const Vertices cloth = e.has_cloth ? Vertices(m.cloth.rowwise() + shift) : Vertices();
+    const Vertices gt_body = read_gt_mesh(info, "body", f, int(ch.body.mesh.V.rows()), ch);
+    const Vertices gt_cloth =
+        e.has_cloth ? read_gt_mesh(info, "cloth", f, int(ch.cloth->mesh.V.rows()), ch) : Vertices();
+    cv::Mat left = draw_meshes(image, camera, ch, body, e.has_cloth ? &cloth : nullptr);
+    cv::Mat right = draw_meshes(image, camera, ch, gt_body, e.has_cloth ? &gt_cloth : nullptr);
+    caption(left, fmt::format("prediction, frame {}", f));
+    caption(right, "ground truth");
+    EvaluationOverlay ov;
+    ov.label = label;
+    ov.id = f;
+    ov.ranked_by = e.has_cloth ? fmt::format("cloth error {:.1f} mm", e.frames[k].cloth_error_mean_mm)
+                               : fmt::format("SVIoU {:.4f}", e.frames[k].sv_iou);
+    cv::hconcat(left, right, ov.image);
+    e.overlays.push_back(std::move(ov));
+  }
+  e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return e;
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,121 @@
+#pragma once
+// `weft eval`: a captured sequence (a `weft infer` capture folder, capture_folder.h)
+// measured against a dataset with 3D ground truth (a `weft synth` dataset,
+// docs/DATASET.md) by the paper's metrics (docs/EVALUATION.md):
+// - out-of-balance force of every three consecutive predicted frames of one clip, mean
+//   and max over vertices and frames, in N and relative to a vertex's weight (needs the
+//   cloth material: a synth config's simulation section), over the vertices the
+//   attachment does not hold and, for reference, over all of them;
+// - penetration of cloth vertices into the body: mean over the penetrating vertices and
+//   max, and the fraction of cloth vertices inside;
+// - silhouette IoU of the rendered body + cloth against the dataset's masks on every N-th
+//   frame: over all views (AMVIoU), all but the input view (RVIoU), the input view (SVIoU);
+// - 3D error: cloth and body vertex distance (mean and 95th percentile, mm), MPJPE over
+//   the mapped BODY_25 keypoints of the posed skeleton (mm), the pivot joint's distance
+//   (the global translation's error, mm).
+// With gt_translation every predicted frame (meshes and joints) is first moved by the
+// ground truth's pivot minus the predicted pivot (the paper applies the true global
+// translation to every method); every metric then measures the moved frames. The ground
+// truth's own penetration and out-of-balance force, measured the same way, are reported
+// beside the prediction's as the floor the data allows.
+#include <opencv2/core.hpp>
+
+#include <Eigen/Core>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace weft::capture {
+
+struct EvaluationOptions {
+  std::string prediction;    // the capture folder
+  std::string data;          // the dataset folder
+  std::string view;          // the input view; "" → capture.json's "view"
+  bool gt_translation = false;
+  int iou_every = 1;         // IoU on every N-th captured frame (in frame-id order), N ≥ 1
+  std::string synth_config;  // overrides capture.json's synth_config ("" keeps it)
+};
+
+inline constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
+
+// One captured frame's measures (NaN where not measured).
+struct FrameEvaluation {
+  int id = 0;
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();  // applied to the prediction (character units)
+  double pivot_error_mm = kNotMeasured;             // before the shift
+  double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured;
+  double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
+  double mpjpe_mm = kNotMeasured;
+  // Penetration: mean over the vertices inside (0 when none is), max, and how many.
+  double penetration_mean_mm = kNotMeasured, penetration_max_mm = kNotMeasured;
+  double penetration_depth_sum_mm = 0;
+  int penetrating_vertices = 0, cloth_vertices = 0;
+  double gt_penetration_mean_mm = kNotMeasured, gt_penetration_max_mm = kNotMeasured;
+  double gt_penetration_depth_sum_mm = 0;
+  int gt_penetrating_vertices = 0;
+  // Out-of-balance force (frames id − 2, id − 1, id predicted and in one clip) over the
+  // vertices the attachment does not hold (frame_measures.h), and over all vertices.
+  double oob_all_mean_n = kNotMeasured, oob_all_max_n = kNotMeasured;
+  double oob_mean_n = kNotMeasured, oob_max_n = kNotMeasured, oob_mean_rel = kNotMeasured,
+         oob_max_rel = kNotMeasured;
+  double gt_oob_mean_n = kNotMeasured, gt_oob_max_n = kNotMeasured, gt_oob_mean_rel = kNotMeasured,
+         gt_oob_max_rel = kNotMeasured;
+  // IoU per dataset view (empty: not an IoU frame), and the three means.
+  std::vector<double> iou;
+  double amv_iou = kNotMeasured, rv_iou = kNotMeasured, sv_iou = kNotMeasured;
+};
+
+// A side-by-side image: the input view with the prediction drawn on it (left) and the
+// ground truth drawn on it (right).
+struct EvaluationOverlay {
+  std::string label;  // "worst", "median"
+  int id = 0;
+  std::string ranked_by;  // the metric that chose the frame and its value, for captions
+  cv::Mat image;          // CV_8UC3 BGR
+};
+
+struct MetricSummary {
+  double mean = kNotMeasured, max = kNotMeasured;
+};
+
+struct CaptureEvaluation {
+  EvaluationOptions options;
+  std::string view;                // the input view used
+  std::vector<std::string> views;  // the dataset's views (the order of FrameEvaluation::iou)
+  std::string character;           // character.yaml
+  std::string synth_config;        // the one used for the out-of-balance force ("" none)
+  double metres_per_unit = 1, fps = 30;
+  bool has_cloth = false;
+  std::vector<std::string> notes;  // what could not be measured and why
+  std::vector<FrameEvaluation> frames;  // in frame-id order
+
+  // Summary (NaN where not measured).
+  int oob_frames = 0, gt_oob_frames = 0;
+  MetricSummary oob_n, oob_rel, gt_oob_n, gt_oob_rel;  // mean over vertices and frames, max
+  MetricSummary oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;  // the same, anchors included
+  double penetration_mean_mm = kNotMeasured, penetration_max_mm = kNotMeasured,
+         penetrating_fraction = kNotMeasured;
+  double gt_penetration_mean_mm = kNotMeasured, gt_penetration_max_mm = kNotMeasured,
+         gt_penetrating_fraction = kNotMeasured;
+  int iou_frames = 0;
+  double amv_iou = kNotMeasured, rv_iou = kNotMeasured, sv_iou = kNotMeasured;
+  double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured;
+  double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
+  double mpjpe_mm = kNotMeasured, pivot_error_mm = kNotMeasured;
+  double seconds = 0;
+
+  std::vector<EvaluationOverlay> overlays;
+
+  // metrics.json: the options, the summary and per-frame arrays (null where not measured).
+  std::string to_json() const;
+};
+
+// Reads both folders and measures every captured frame; progress(done, total) after each
+// frame. Errors (weft::Error) name the file and what was expected: a missing or malformed
+// capture folder, a frame id the dataset does not have, a mesh of the wrong vertex count,
+// a view the dataset does not have.
+CaptureEvaluation evaluate_capture(const EvaluationOptions& options,
+                                   const std::function<void(int done, int total)>& progress = {});
+
+}  // namespace weft::capture

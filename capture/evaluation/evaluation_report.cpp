@@ -1,0 +1,348 @@
+#include "capture/evaluation/evaluation_report.h"
+
+#include <fmt/format.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "capture/io/atomic_file.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string overlay_file(const EvaluationOverlay& o) { return fmt::format("overlay_{}_{:04d}.png", o.label, o.id); }
+
+// One per-frame value of every frame (NaN → null in JSON).
+template <class Get>
+std::vector<double> column(const CaptureEvaluation& e, Get get) {
+  std::vector<double> v;
+  for (const FrameEvaluation& f : e.frames) v.push_back(get(f));
+  return v;
+}
+
+std::string escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// A number for the tables ("—" when not measured).
+std::string num(double v, int decimals) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : "—"; }
+std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "—"; }
+
+// "nice" tick step for a range.
+double tick_step(double range) {
+  if (!(range > 0)) return 1;
+  const double raw = range / 5, p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * p >= raw) return m * p;
+  return 10 * p;
+}
+
+}  // namespace
+
+std::string CaptureEvaluation::to_json() const {
+  json j;
+  j["format"] = "weft-eval/1";
+  j["prediction"] = options.prediction;
+  j["data"] = options.data;
+  j["view"] = view;
+  j["views"] = views;
+  j["character"] = character;
+  j["synth_config"] = synth_config;
+  j["gt_translation"] = options.gt_translation;
+  j["iou_every"] = options.iou_every;
+  j["metres_per_unit"] = metres_per_unit;
+  j["fps"] = fps;
+  j["seconds"] = seconds;
+  j["notes"] = notes;
+  json& s = j["summary"];
+  s["frames"] = frames.size();
+  s["out_of_balance_force"] = {{"frames", oob_frames},      {"mean_n", oob_n.mean},     {"max_n", oob_n.max},
+                               {"mean_rel", oob_rel.mean}, {"max_rel", oob_rel.max},
+                               {"ground_truth",
+                                {{"frames", gt_oob_frames},
+                                 {"mean_n", gt_oob_n.mean},
+                                 {"max_n", gt_oob_n.max},
+                                 {"mean_rel", gt_oob_rel.mean},
+                                 {"max_rel", gt_oob_rel.max}}}};
+  s["out_of_balance_force_all_vertices"] = {{"mean_n", oob_all_n.mean},
+                                            {"max_n", oob_all_n.max},
+                                            {"mean_rel", oob_all_rel.mean},
+                                            {"max_rel", oob_all_rel.max},
+                                            {"ground_truth",
+                                             {{"mean_n", gt_oob_all_n.mean},
+                                              {"max_n", gt_oob_all_n.max},
+                                              {"mean_rel", gt_oob_all_rel.mean},
+                                              {"max_rel", gt_oob_all_rel.max}}}};
+  s["penetration"] = {{"mean_cm", penetration_mean_mm / 10},
+                      {"mean_mm", penetration_mean_mm},
+                      {"max_mm", penetration_max_mm},
+                      {"fraction_inside", penetrating_fraction},
+                      {"ground_truth",
+                       {{"mean_cm", gt_penetration_mean_mm / 10},
+                        {"mean_mm", gt_penetration_mean_mm},
+                        {"max_mm", gt_penetration_max_mm},
+                        {"fraction_inside", gt_penetrating_fraction}}}};
+  s["iou"] = {{"frames", iou_frames}, {"amv", amv_iou}, {"rv", rv_iou}, {"sv", sv_iou}};
+  s["cloth_error_mm"] = {{"mean", cloth_error_mean_mm}, {"p95", cloth_error_p95_mm}};
+  s["body_error_mm"] = {{"mean", body_error_mean_mm}, {"p95", body_error_p95_mm}};
+  s["mpjpe_mm"] = mpjpe_mm;
+  s["pivot_error_mm"] = pivot_error_mm;
+  json& p = j["per_frame"];
+  std::vector<int> ids;
+  json shifts = json::array(), ious = json::array();
+  for (const FrameEvaluation& f : frames) {
+    ids.push_back(f.id);
+    shifts.push_back({f.shift.x(), f.shift.y(), f.shift.z()});
+    ious.push_back(f.iou.empty() ? json(nullptr) : json(f.iou));
+  }
+  p["id"] = ids;
+  p["shift"] = shifts;
+  p["pivot_error_mm"] = column(*this, [](const auto& f) { return f.pivot_error_mm; });
+  p["cloth_error_mean_mm"] = column(*this, [](const auto& f) { return f.cloth_error_mean_mm; });
+  p["cloth_error_p95_mm"] = column(*this, [](const auto& f) { return f.cloth_error_p95_mm; });
+  p["body_error_mean_mm"] = column(*this, [](const auto& f) { return f.body_error_mean_mm; });
+  p["body_error_p95_mm"] = column(*this, [](const auto& f) { return f.body_error_p95_mm; });
+  p["mpjpe_mm"] = column(*this, [](const auto& f) { return f.mpjpe_mm; });
+  p["penetration_mean_mm"] = column(*this, [](const auto& f) { return f.penetration_mean_mm; });
+  p["penetration_max_mm"] = column(*this, [](const auto& f) { return f.penetration_max_mm; });
+  p["penetrating_vertices"] = column(*this, [](const auto& f) { return double(f.penetrating_vertices); });
+  p["gt_penetration_mean_mm"] = column(*this, [](const auto& f) { return f.gt_penetration_mean_mm; });
+  p["gt_penetration_max_mm"] = column(*this, [](const auto& f) { return f.gt_penetration_max_mm; });
+  p["oob_force_mean_n"] = column(*this, [](const auto& f) { return f.oob_mean_n; });
+  p["oob_force_max_n"] = column(*this, [](const auto& f) { return f.oob_max_n; });
+  p["oob_force_mean_rel"] = column(*this, [](const auto& f) { return f.oob_mean_rel; });
+  p["oob_force_max_rel"] = column(*this, [](const auto& f) { return f.oob_max_rel; });
+  p["oob_force_all_vertices_mean_n"] = column(*this, [](const auto& f) { return f.oob_all_mean_n; });
+  p["oob_force_all_vertices_max_n"] = column(*this, [](const auto& f) { return f.oob_all_max_n; });
+  p["gt_oob_force_mean_n"] = column(*this, [](const auto& f) { return f.gt_oob_mean_n; });
+  p["gt_oob_force_max_n"] = column(*this, [](const auto& f) { return f.gt_oob_max_n; });
+  p["amv_iou"] = column(*this, [](const auto& f) { return f.amv_iou; });
+  p["rv_iou"] = column(*this, [](const auto& f) { return f.rv_iou; });
+  p["sv_iou"] = column(*this, [](const auto& f) { return f.sv_iou; });
+  p["iou_per_view"] = ious;
+  json ov = json::array();
+  for (const EvaluationOverlay& o : overlays)
+    ov.push_back({{"label", o.label}, {"id", o.id}, {"ranked_by", o.ranked_by}, {"file", overlay_file(o)}});
+  j["overlays"] = ov;
+  return j.dump(1) + "\n";
+}
+
+std::string svg_line_plot(const std::string& title, const std::string& unit, const std::vector<int>& ids,
+                          const std::vector<PlotSeries>& series) {
+  const double W = 640, H = 230, left = 64, right = 12, top = 28, bottom = 36;
+  double lo = 0, hi = 0;
+  bool any = false;
+  for (const PlotSeries& s : series)
+    for (double v : s.values)
+      if (std::isfinite(v)) lo = any ? std::min(lo, v) : std::min(0.0, v), hi = any ? std::max(hi, v) : v, any = true;
+  if (!(hi > lo)) hi = lo + 1;
+  const double step = tick_step(hi - lo);
+  hi = std::ceil(hi / step - 1e-9) * step, lo = std::floor(lo / step + 1e-9) * step;
+  const int x0 = ids.empty() ? 0 : ids.front(), x1 = ids.empty() ? 1 : std::max(ids.back(), ids.front() + 1);
+  const auto X = [&](double id) { return left + (id - x0) / double(x1 - x0) * (W - left - right); };
+  const auto Y = [&](double v) { return top + (hi - v) / (hi - lo) * (H - top - bottom); };
+  std::string svg = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" "
+      "font-family=\"sans-serif\" font-size=\"11\">\n<text x=\"{}\" y=\"16\" font-size=\"13\" "
+      "font-weight=\"bold\">{}</text>\n",
+      W, H, W, H, left, escape(title));
+  for (double v = lo; v <= hi + 1e-9 * step; v += step)
+    svg += fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/><text x=\"{:.1f}\" "
+        "y=\"{:.1f}\" text-anchor=\"end\">{:.4g}</text>\n",
+        left, Y(v), W - right, Y(v), left - 4, Y(v) + 4, v);
+  const int xstep = std::max(1, int(tick_step(x1 - x0)));
+  for (int id = (x0 / xstep) * xstep; id <= x1; id += xstep) {
+    if (id < x0) continue;
+    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(id),
+                       H - bottom + 14, id);
+  }
+  svg += fmt::format(
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">frame</text>\n<text x=\"12\" y=\"{:.1f}\" "
+      "transform=\"rotate(-90 12 {:.1f})\" text-anchor=\"middle\">{}</text>\n"
+      "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>\n",
+      (left + W - right) / 2, H - 4, (top + H - bottom) / 2, (top + H - bottom) / 2, escape(unit), left, top,
+      W - left - right, H - top - bottom);
+  double legend_x = W - right - 8;
+  for (auto it = series.rbegin(); it != series.rend(); ++it) {
+    legend_x -= 7.0 * it->name.size() + 22;
+    svg += fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"12\" x2=\"{:.1f}\" y2=\"12\" stroke=\"{}\" stroke-width=\"2\"/><text x=\"{:.1f}\" "
+        "y=\"16\">{}</text>\n",
+        legend_x, legend_x + 14, it->colour, legend_x + 17, escape(it->name));
+  }
+  for (const PlotSeries& s : series) {
+    WEFT_CHECK(s.values.size() == ids.size(), "svg_line_plot: series '", s.name, "' has ", s.values.size(),
+               " values for ", ids.size(), " frames");
+    std::string run;
+    int run_points = 0;
+    size_t last = 0;  // the run's last point
+    const auto flush = [&] {
+      if (run_points == 1)
+        svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n", X(ids[last]),
+                           Y(s.values[last]), s.colour);
+      else if (run_points > 1)
+        svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
+                           s.colour, run);
+      run.clear(), run_points = 0;
+    };
+    for (size_t i = 0; i < ids.size(); ++i) {
+      if (!std::isfinite(s.values[i])) {
+        if (!s.connect_gaps) flush();
+        continue;
+      }
+      // A gap where captured frame ids jump.
+      if (run_points && ids[i] - ids[last] != int(i - last)) flush();
+      run += fmt::format("{:.1f},{:.1f} ", X(ids[i]), Y(s.values[i]));
+      ++run_points, last = i;
+    }
+    flush();
+  }
+  return svg + "</svg>\n";
+}
+
+std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, const std::string& dir) {
+  fs::create_directories(dir);
+  // Overlays of an earlier report in this folder would be left beside this one's.
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    const bool current = std::any_of(e.overlays.begin(), e.overlays.end(),
+                                     [&](const EvaluationOverlay& o) { return overlay_file(o) == name; });
+    if (name.rfind("overlay_", 0) == 0 && entry.path().extension() == ".png" && !current) fs::remove(entry.path());
+  }
+  std::vector<std::string> written;
+  const auto write_text = [&](const std::string& name, const std::string& text) {
+    const std::string path = (fs::path(dir) / name).string();
+    write_text_atomically(path, text);
+    written.push_back(path);
+  };
+  for (const EvaluationOverlay& o : e.overlays) {
+    std::vector<uchar> png;
+    WEFT_CHECK(cv::imencode(".png", o.image, png), overlay_file(o), ": PNG encoding failed");
+    const std::string path = (fs::path(dir) / overlay_file(o)).string();
+    write_bytes_atomically(path, png.data(), png.size());
+    written.push_back(path);
+  }
+  write_text("metrics.json", e.to_json());
+
+  std::vector<int> ids;
+  for (const FrameEvaluation& f : e.frames) ids.push_back(f.id);
+  const auto col = [&](auto get) { return column(e, get); };
+  std::string h;
+  h += "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>weft eval: " + escape(e.options.prediction) +
+       "</title>\n<style>body{font-family:sans-serif;max-width:1400px;margin:1em auto;padding:0 1em}"
+       "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
+       "th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}.note{color:#a40}"
+       "img{max-width:100%;border:1px solid #ccc}code{background:#f5f5f5}</style></head><body>\n";
+  h += "<h1>weft eval</h1>\n<p>prediction <code>" + escape(e.options.prediction) + "</code><br>data <code>" +
+       escape(e.options.data) + "</code><br>input view <b>" + escape(e.view) + "</b> of " +
+       std::to_string(e.views.size()) + " views; " + std::to_string(e.frames.size()) + " captured frames; " +
+       (e.options.gt_translation ? "<b>ground-truth global translation applied</b> (--gt-translation)"
+                                 : "predicted global translation") +
+       (e.options.iou_every == 1 ? std::string("; IoU on every frame")
+                                 : fmt::format("; IoU on one frame in {}", e.options.iou_every)) +
+       "; cloth material from " +
+       (e.synth_config.empty() ? std::string("— (none)") : "<code>" + escape(e.synth_config) + "</code>") +
+       fmt::format("; {:.1f} s.</p>\n", e.seconds);
+  for (const std::string& n : e.notes) h += "<p class=\"note\">" + escape(n) + "</p>\n";
+
+  h += "<h2>Summary</h2>\n<table><tr><th>metric</th><th>prediction</th><th>ground truth (same measure)</th>"
+       "<th>unit</th></tr>\n";
+  const auto row = [&](const std::string& name, const std::string& pred, const std::string& gt,
+                       const std::string& unit) {
+    h += "<tr><td>" + name + "</td><td>" + pred + "</td><td>" + gt + "</td><td>" + unit + "</td></tr>\n";
+  };
+  row(fmt::format("out-of-balance force (vertices the attachment does not hold), mean (over {} frame{})", e.oob_frames,
+                 e.oob_frames == 1 ? "" : "s"), sci(e.oob_n.mean), sci(e.gt_oob_n.mean), "N");
+  row("out-of-balance force, max", sci(e.oob_n.max), sci(e.gt_oob_n.max), "N");
+  row("out-of-balance force, mean, relative", sci(e.oob_rel.mean), sci(e.gt_oob_rel.mean), "× vertex weight");
+  row("out-of-balance force, max, relative", sci(e.oob_rel.max), sci(e.gt_oob_rel.max), "× vertex weight");
+  row("out-of-balance force over all vertices (anchors pinned where predicted), mean", sci(e.oob_all_n.mean),
+      sci(e.gt_oob_all_n.mean), "N");
+  row("out-of-balance force over all vertices, max", sci(e.oob_all_n.max), sci(e.gt_oob_all_n.max), "N");
+  row("out-of-balance force over all vertices, mean, relative", sci(e.oob_all_rel.mean), sci(e.gt_oob_all_rel.mean),
+      "× vertex weight");
+  row("penetration depth, mean over penetrating vertices", num(e.penetration_mean_mm / 10, 3),
+      num(e.gt_penetration_mean_mm / 10, 3), "cm");
+  row("penetration depth, max", num(e.penetration_max_mm, 2), num(e.gt_penetration_max_mm, 2), "mm");
+  row("cloth vertices inside the body", num(100 * e.penetrating_fraction, 2), num(100 * e.gt_penetrating_fraction, 2),
+      "%");
+  row(fmt::format("AMVIoU (all views, over {} frame{})", e.iou_frames, e.iou_frames == 1 ? "" : "s"),
+      num(e.amv_iou, 4), "", "");
+  row("RVIoU (all but the input view)", num(e.rv_iou, 4), "", "");
+  row("SVIoU (the input view)", num(e.sv_iou, 4), "", "");
+  row("cloth vertex error, mean", num(e.cloth_error_mean_mm, 2), "", "mm");
+  row("cloth vertex error, 95th percentile", num(e.cloth_error_p95_mm, 2), "", "mm");
+  row("body vertex error, mean", num(e.body_error_mean_mm, 2), "", "mm");
+  row("body vertex error, 95th percentile", num(e.body_error_p95_mm, 2), "", "mm");
+  row("MPJPE (mapped BODY_25 joints)", num(e.mpjpe_mm, 2), "", "mm");
+  row("global translation error (pivot joint, before any shift)", num(e.pivot_error_mm, 2), "", "mm");
+  h += "</table>\n<p>Definitions: docs/EVALUATION.md. The ground-truth column measures the dataset's own meshes "
+       "the same way: the floor the data allows.</p>\n";
+
+  h += "<h2>Per frame</h2>\n";
+  h += svg_line_plot("3D vertex error", "mm",
+                     ids, {{"cloth mean", col([](const auto& f) { return f.cloth_error_mean_mm; }), "#d62728"},
+                           {"cloth p95", col([](const auto& f) { return f.cloth_error_p95_mm; }), "#ff9896"},
+                           {"body mean", col([](const auto& f) { return f.body_error_mean_mm; }), "#1f77b4"},
+                           {"body p95", col([](const auto& f) { return f.body_error_p95_mm; }), "#aec7e8"}});
+  h += svg_line_plot("Joint and global translation error", "mm", ids,
+                     {{"MPJPE", col([](const auto& f) { return f.mpjpe_mm; }), "#2ca02c"},
+                      {"pivot", col([](const auto& f) { return f.pivot_error_mm; }), "#9467bd"}});
+  h += svg_line_plot("Penetration depth", "mm", ids,
+                     {{"mean", col([](const auto& f) { return f.penetration_mean_mm; }), "#d62728"},
+                      {"max", col([](const auto& f) { return f.penetration_max_mm; }), "#ff7f0e"},
+                      {"ground truth max", col([](const auto& f) { return f.gt_penetration_max_mm; }), "#7f7f7f"}});
+  h += svg_line_plot("Out-of-balance force", "N", ids,
+                     {{"mean", col([](const auto& f) { return f.oob_mean_n; }), "#1f77b4"},
+                      {"max", col([](const auto& f) { return f.oob_max_n; }), "#ff7f0e"},
+                      {"ground truth max", col([](const auto& f) { return f.gt_oob_max_n; }), "#7f7f7f"}});
+  h += svg_line_plot("Out-of-balance force relative to a vertex's weight", "× m g", ids,
+                     {{"mean", col([](const auto& f) { return f.oob_mean_rel; }), "#1f77b4"},
+                      {"max", col([](const auto& f) { return f.oob_max_rel; }), "#ff7f0e"}});
+  h += svg_line_plot("Silhouette IoU", "IoU", ids,
+                     {{"AMV", col([](const auto& f) { return f.amv_iou; }), "#2ca02c", true},
+                      {"RV", col([](const auto& f) { return f.rv_iou; }), "#17becf", true},
+                      {"SV", col([](const auto& f) { return f.sv_iou; }), "#bcbd22", true}});
+
+  h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
+       "outline white) beside the ground truth drawn the same way (right).</p>\n";
+  for (const EvaluationOverlay& o : e.overlays)
+    h += "<h3>" + escape(o.label) + " frame " + std::to_string(o.id) + " (" + escape(o.ranked_by) +
+         ")</h3>\n<img src=\"" + overlay_file(o) + "\" alt=\"" + escape(o.label) + " frame\">\n";
+
+  h += "<h2>Per-frame table</h2>\n<table><tr><th>frame</th><th>cloth mm</th><th>body mm</th><th>MPJPE mm</th>"
+       "<th>pivot mm</th><th>pen. mean mm</th><th>pen. max mm</th><th>OOB mean N</th><th>OOB max N</th>"
+       "<th>AMVIoU</th><th>RVIoU</th><th>SVIoU</th></tr>\n";
+  for (const FrameEvaluation& f : e.frames)
+    h += fmt::format(
+        "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+        "<td>{}</td><td>{}</td><td>{}</td></tr>\n",
+        f.id, num(f.cloth_error_mean_mm, 2), num(f.body_error_mean_mm, 2), num(f.mpjpe_mm, 2), num(f.pivot_error_mm, 2),
+        num(f.penetration_mean_mm, 3), num(f.penetration_max_mm, 3), sci(f.oob_mean_n), sci(f.oob_max_n),
+        num(f.amv_iou, 4), num(f.rv_iou, 4), num(f.sv_iou, 4));
+  h += "</table>\n<p>All numbers: <a href=\"metrics.json\">metrics.json</a>.</p>\n</body></html>\n";
+  write_text("report.html", h);
+  return written;
+}
+
+}  // namespace weft::capture

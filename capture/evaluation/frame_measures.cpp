@@ -1,0 +1,74 @@
+#include "capture/evaluation/frame_measures.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "capture/studio/garment_simulator.h"
+#include "capture/training/multiview_losses.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+std::vector<double> vertex_distances_mm(const Vertices& a, const Vertices& b, double mpu) {
+  WEFT_CHECK(a.rows() == b.rows(), "vertex_distances_mm: ", a.rows(), " against ", b.rows(), " vertices");
+  std::vector<double> d(a.rows());
+  for (int i = 0; i < a.rows(); ++i) d[i] = (a.row(i) - b.row(i)).norm() * mpu * 1e3;
+  return d;
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const double pos = std::clamp(q, 0.0, 1.0) * double(v.size() - 1);
+  const size_t lo = size_t(std::floor(pos)), hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - double(lo)) * (v[hi] - v[lo]);
+}
+
+double mean_joint_error_mm(const Vertices& p, const Vertices& g, double mpu) {
+  WEFT_CHECK(p.rows() == g.rows(), "mean_joint_error_mm: ", p.rows(), " against ", g.rows(), " keypoints");
+  double sum = 0;
+  int n = 0;
+  for (int m = 0; m < p.rows(); ++m) {
+    if (!p.row(m).allFinite() || !g.row(m).allFinite()) continue;
+    sum += (p.row(m) - g.row(m)).norm() * mpu * 1e3;
+    ++n;
+  }
+  return n ? sum / n : std::numeric_limits<double>::quiet_NaN();
+}
+
+Penetration cloth_penetration(const Character& ch, const Vertices& body, const Vertices& cloth) {
+  return body_penetration(body_obstacle(ch, Eigen::MatrixX3d(body * ch.metres_per_unit)),
+                          to_positions(cloth, ch.metres_per_unit));
+}
+
+ClothBalance cloth_out_of_balance(const Character& ch, const SynthSimulationConfig& simulation, double fps,
+                                  const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,
+                                  const Vertices& cloth_prev, const Vertices& cloth) {
+  const double mpu = ch.metres_per_unit;
+  // Pinned where predicted: the anchors' targets are the predicted anchors themselves.
+  auto sim = make_garment_simulator(ch, simulation, fps, Eigen::MatrixX3d(body_prev * mpu),
+                                    garment_pin_targets(ch, cloth));
+  sim->body(0).set_vertices(Eigen::MatrixX3d(body * mpu));
+  const physics::Positions x2 = to_positions(cloth_prev2, mpu), x1 = to_positions(cloth_prev, mpu),
+                           x = to_positions(cloth, mpu);
+  ClothBalance b;
+  physics::measure_out_of_balance(*sim, x2, x1, x, 1.0 / fps, b.all);
+  physics::measure_out_of_balance(*sim, x2, x1, x, 1.0 / fps, b.free, garment_pin_vertices(ch));
+  return b;
+}
+
+std::vector<double> silhouette_ious(const Character& ch, const Vertices& body, const Vertices* cloth,
+                                    const std::vector<Camera>& cameras, const std::vector<cv::Mat>& masks) {
+  WEFT_CHECK(cameras.size() == masks.size(), "silhouette_ious: ", cameras.size(), " cameras and ", masks.size(),
+             " masks");
+  std::vector<double> iou(cameras.size());
+  tbb::parallel_for(size_t(0), cameras.size(), [&](size_t k) {
+    iou[k] = rendered_silhouette_iou(cameras[k], ch, body, cloth, masks[k]);
+  });
+  return iou;
+}
+
+}  // namespace weft::capture

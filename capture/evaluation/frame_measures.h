@@ -1,0 +1,62 @@
+#pragma once
+// The paper's per-frame measures of a predicted body and garment (character units in,
+// the units named in each result out), each on plain Eigen meshes so that they apply to
+// any method's output:
+// - vertex distance to the ground truth (mm) and the joint error over the mapped BODY_25
+//   keypoints (MPJPE, mm);
+// - penetration of cloth vertices into the body's active faces (those the simulator
+//   collides with; capture/studio/garment_simulator.h body_obstacle);
+// - out-of-balance force m·a − (f_int + f_ext + f_coll) of the newest of three
+//   consecutive frames (physics/cloth_metrics.h), a from their centred difference, with
+//   the garment simulator of a synth config's simulation section: the predicted body of
+//   the two newest frames as the moving obstacle, over the vertices not held by the
+//   attachment (the anchors, e.g. the waistband) and over all;
+// - silhouette IoU of the rendered body + cloth against a mask per view.
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+#include "capture/character/character.h"
+#include "capture/io/camera.h"
+#include "capture/studio/garment_windows.h"
+#include "capture/studio/synthetic_studio.h"
+#include "physics/cloth_metrics.h"
+
+namespace weft::capture {
+
+// ‖a_i − b_i‖ per row, in mm (rows of a and b correspond; character units × metres_per_unit).
+std::vector<double> vertex_distances_mm(const Vertices& a, const Vertices& b, double metres_per_unit);
+
+// The q-quantile (q in [0, 1]) with linear interpolation between order statistics
+// (NumPy's default); NaN for no values.
+double quantile(std::vector<double> values, double q);
+
+// Mean distance (mm) over the BODY_25 rows finite in both (unmapped keypoints are NaN);
+// NaN when none is.
+double mean_joint_error_mm(const Vertices& predicted_body25, const Vertices& true_body25, double metres_per_unit);
+
+// Cloth vertices inside the body (depths in metres).
+Penetration cloth_penetration(const Character& character, const Vertices& body, const Vertices& cloth);
+
+// Out-of-balance force of frame t given frames t − 2 and t − 1, 1/fps s apart (the
+// character needs a garment). body_prev and body: the body at frames t − 1 and t. The
+// anchors are pinned where they are predicted (a pin then adds no force), and measured:
+// - free: over the unpinned vertices. An anchor is held by its attachment to the body,
+//   whose reaction force is not modelled, so its own balance is not measured;
+// - all: over every vertex, as `weft train --evaluate` measures. The anchors then show the
+//   load of the garment hanging from them as out of balance (4.8 m g on average over the
+//   tiny dataset's simulated ground truth, where the free vertices are in balance).
+struct ClothBalance {
+  physics::FrameMetrics free, all;
+};
+ClothBalance cloth_out_of_balance(const Character& character, const SynthSimulationConfig& simulation, double fps,
+                                  const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,
+                                  const Vertices& cloth_prev, const Vertices& cloth);
+
+// IoU per camera of the rendered body (+ cloth when given) against masks[k] (CV_8UC1 of
+// cameras[k]'s image size, nonzero foreground); 0 for a camera the body is not wholly in
+// front of. Views render in parallel.
+std::vector<double> silhouette_ious(const Character& character, const Vertices& body, const Vertices* cloth,
+                                    const std::vector<Camera>& cameras, const std::vector<cv::Mat>& masks);
+
+}  // namespace weft::capture

@@ -1,0 +1,322 @@
+// `weft eval` on the tiny dataset (configs/synth/tiny.yaml): a capture folder built from
+// the dataset's own ground truth (a perfect prediction) has zero vertex and joint error,
+// the ground truth's penetration and out-of-balance force, and a high IoU; the same
+// prediction moved sideways is wrong by the move unless --gt-translation takes it back;
+// the report holds every metric; bad capture folders are errors naming the file.
+#include <gtest/gtest.h>
+#include <fmt/format.h>
+#include <sys/wait.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/evaluation/capture_evaluation.h"
+#include "capture/evaluation/evaluation_report.h"
+#include "capture/io/mesh_io.h"
+#include "capture/studio/synthetic_studio.h"
+#include "capture/training/capture_networks.h"
+#include "tests/capture/test_files.h"
+
+using namespace weft::capture;
+namespace fs = std::filesystem;
+using weft::capture::testing::expect_error;
+using weft::capture::testing::repo_file;
+using weft::capture::testing::slurp;
+
+namespace {
+
+fs::path scratch_root() { return fs::temp_directory_path() / ("weft_eval_test_" + std::to_string(::getpid())); }
+
+// The tiny dataset, written once per test program and removed at exit.
+const fs::path& tiny() {
+  static std::unique_ptr<fs::path> dir;
+  if (!dir) {
+    fs::remove_all(scratch_root());
+    fs::create_directories(scratch_root());
+    dir = std::make_unique<fs::path>(scratch_root() / "tiny");
+    synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), dir->string());
+    static struct Cleanup {
+      ~Cleanup() {
+        std::error_code ec;
+        fs::remove_all(scratch_root(), ec);
+      }
+    } cleanup;
+  }
+  return *dir;
+}
+
+// A capture folder holding the dataset's ground truth for `frames`, every mesh, joint and
+// pivot moved by `offset` (character units).
+fs::path perfect_capture(const std::string& name, const std::vector<int>& frames,
+                         const Eigen::Vector3d& offset = Eigen::Vector3d::Zero(),
+                         const Eigen::Vector3d& cloth_offset = Eigen::Vector3d::Zero()) {
+  const DatasetInfo info = read_dataset_info(tiny().string());
+  const Character ch = load_character(info.character);
+  const Motion gt = read_motion((tiny() / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
+  const PoseParametrisation param = pose_parametrisation(ch);
+  const fs::path dir = scratch_root() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir / "meshes");
+  nlohmann::json j = {{"format", "weft-capture/1"},  {"model", "/nowhere/model"},
+                      {"character", info.character}, {"metres_per_unit", info.metres_per_unit},
+                      {"synth_config", repo_file("configs/synth/tiny.yaml")},
+                      {"input", (tiny() / "images" / "cam03").string()},
+                      {"camera", (tiny() / "cameras.yaml").string()},
+                      {"view", "cam03"},             {"fps", 30},
+                      {"collisions_resolved", false}, {"timing", {{"total_s", 0.0}}}};
+  Motion m;
+  m.dofs.resize(frames.size(), ch.rest_dofs.size());
+  const auto pivot_of = [&](const Eigen::VectorXd& dofs) {
+    return Eigen::Vector3d(pose_character(ch, dofs).joints[param.pivot_joint].translation());
+  };
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const int f = frames[i];
+    m.frame_ids.push_back(f);
+    Eigen::VectorXd dofs = gt.dofs.row(f).transpose();
+    if (!offset.isZero()) {
+      // The root chain's translation moves the pivot linearly: solve for the dofs' change.
+      Eigen::MatrixXd J(3, param.root_dofs.size());
+      for (size_t k = 0; k < param.root_dofs.size(); ++k) {
+        Eigen::VectorXd d = dofs;
+        d[param.root_dofs[k]] += 1e-3;
+        J.col(k) = (pivot_of(d) - pivot_of(dofs)) / 1e-3;
+      }
+      const Eigen::VectorXd step = J.completeOrthogonalDecomposition().solve(offset);
+      const Eigen::Vector3d before = pivot_of(dofs);
+      for (size_t k = 0; k < param.root_dofs.size(); ++k) dofs[param.root_dofs[k]] += step[k];
+      EXPECT_LT((pivot_of(dofs) - before - offset).norm(), 1e-9);
+    }
+    m.dofs.row(i) = dofs.transpose();
+    const Eigen::Vector3d pivot = pivot_of(dofs);
+    j["frames"].push_back(nlohmann::json::object({{"id", f},
+                                                  {"source", fmt::format("{:04d}.png", f)},
+                                                  {"pivot", {pivot.x(), pivot.y(), pivot.z()}},
+                                                  {"translation_from", "ground truth"}}));
+    for (const char* part : {"body", "cloth"}) {
+      TriangleMesh mesh = read_ply((tiny() / "gt" / fmt::format("{}_{:04d}.ply", part, f)).string());
+      mesh.V.rowwise() += offset.transpose();
+      if (std::string(part) == "cloth") mesh.V.rowwise() += cloth_offset.transpose();
+      write_ply((dir / "meshes" / fmt::format("{}_{:04d}.ply", part, f)).string(), mesh);
+    }
+  }
+  write_motion((dir / "pose.motion").string(), m);
+  std::ofstream(dir / "capture.json") << j.dump(1);
+  return dir;
+}
+
+std::vector<int> all_frames() {
+  const DatasetInfo info = read_dataset_info(tiny().string());
+  std::vector<int> frames;
+  for (int f = 0; f < info.frames; ++f)
+    if (!std::count(info.failed_frames.begin(), info.failed_frames.end(), f)) frames.push_back(f);
+  return frames;
+}
+
+EvaluationOptions options(const fs::path& capture) {
+  EvaluationOptions o;
+  o.prediction = capture.string();
+  o.data = tiny().string();
+  return o;
+}
+
+}  // namespace
+
+TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruthsPhysics) {
+  const std::vector<int> frames = all_frames();
+  ASSERT_EQ(frames.size(), 6u);
+  const fs::path capture = perfect_capture("perfect", frames);
+  const CaptureEvaluation e = evaluate_capture(options(capture));
+  ASSERT_EQ(e.frames.size(), frames.size());
+  EXPECT_EQ(e.view, "cam03");
+  EXPECT_EQ(e.cloth_error_mean_mm, 0.0);
+  EXPECT_EQ(e.cloth_error_p95_mm, 0.0);
+  EXPECT_EQ(e.body_error_mean_mm, 0.0);
+  EXPECT_EQ(e.body_error_p95_mm, 0.0);
+  EXPECT_NEAR(e.mpjpe_mm, 0.0, 1e-9);
+  EXPECT_NEAR(e.pivot_error_mm, 0.0, 1e-9);
+  // The dataset's masks are renders of these meshes at the same cameras: measured 1.000000
+  // in every view (the renderer is deterministic), asserted with a margin for the edges.
+  EXPECT_GT(e.amv_iou, 0.999);
+  EXPECT_GT(e.rv_iou, 0.999);
+  EXPECT_GT(e.sv_iou, 0.999);
+  EXPECT_EQ(e.iou_frames, 6);
+  // Penetration and out-of-balance force are the ground truth's, frame by frame.
+  EXPECT_EQ(e.penetration_mean_mm, e.gt_penetration_mean_mm);
+  EXPECT_EQ(e.penetration_max_mm, e.gt_penetration_max_mm);
+  EXPECT_EQ(e.penetrating_fraction, e.gt_penetrating_fraction);
+  EXPECT_EQ(e.oob_frames, 4);  // frames 2..5 have their two predecessors
+  EXPECT_EQ(e.oob_n.mean, e.gt_oob_n.mean);
+  EXPECT_EQ(e.oob_n.max, e.gt_oob_n.max);
+  std::printf("perfect prediction: AMVIoU %.6f RVIoU %.6f SVIoU %.6f; penetration %.4f mm mean, %.4f mm max, %.4f %%; "
+              "out-of-balance (free vertices) %.4g m g mean, %.4g m g max, %.4g N max; all vertices %.4g m g mean, "
+              "%.4g m g max\n",
+              e.amv_iou, e.rv_iou, e.sv_iou, e.penetration_mean_mm, e.penetration_max_mm, 100 * e.penetrating_fraction,
+              e.oob_rel.mean, e.oob_rel.max, e.oob_n.max, e.oob_all_rel.mean, e.oob_all_rel.max);
+  EXPECT_EQ(e.oob_all_n.mean, e.gt_oob_all_n.mean);
+  // Every vertex the attachment does not hold is within the synth's Newton tolerance (10⁻³
+  // of its weight) of balance; the anchors carry the hanging skirt (4.8 m g on average
+  // over all vertices, measured).
+  EXPECT_GT(e.oob_n.max, 0.0);
+  EXPECT_LT(e.oob_rel.max, 1e-3);
+  EXPECT_GT(e.oob_all_rel.mean, 1.0);
+  EXPECT_TRUE(e.notes.empty()) << e.notes.front();
+  ASSERT_EQ(e.overlays.size(), 2u);
+  EXPECT_EQ(e.overlays[0].label, "worst");
+  EXPECT_EQ(e.overlays[0].image.cols, 2 * 256);
+
+  // The report: every metric present.
+  const fs::path report = scratch_root() / "report_perfect";
+  fs::create_directories(report);
+  std::ofstream(report / "overlay_worst_0099.png") << "an earlier report's";
+  const std::vector<std::string> written = write_evaluation_report(e, report.string());
+  EXPECT_FALSE(fs::exists(report / "overlay_worst_0099.png"));
+  EXPECT_EQ(written.size(), 4u);  // two overlays, metrics.json, report.html
+  const nlohmann::json j = nlohmann::json::parse(slurp(report / "metrics.json"));
+  const nlohmann::json& s = j["summary"];
+  for (const char* key : {"mean_n", "max_n", "mean_rel", "max_rel"}) {
+    EXPECT_TRUE(s["out_of_balance_force"][key].is_number()) << key;
+    EXPECT_TRUE(s["out_of_balance_force"]["ground_truth"][key].is_number()) << key;
+  }
+  for (const char* key : {"mean_cm", "mean_mm", "max_mm", "fraction_inside"})
+    EXPECT_TRUE(s["penetration"][key].is_number()) << key;
+  for (const char* key : {"amv", "rv", "sv"}) EXPECT_TRUE(s["iou"][key].is_number()) << key;
+  EXPECT_TRUE(s["cloth_error_mm"]["p95"].is_number());
+  EXPECT_TRUE(s["body_error_mm"]["mean"].is_number());
+  EXPECT_TRUE(s["mpjpe_mm"].is_number());
+  EXPECT_EQ(j["per_frame"]["id"].size(), 6u);
+  EXPECT_TRUE(j["per_frame"]["oob_force_mean_n"][0].is_null());  // frame 0 has no predecessors
+  EXPECT_TRUE(j["per_frame"]["oob_force_mean_n"][2].is_number());
+  EXPECT_EQ(j["per_frame"]["iou_per_view"][0].size(), 8u);
+  const std::string html = slurp(report / "report.html");
+  for (const char* part : {"AMVIoU", "RVIoU", "SVIoU", "MPJPE", "out-of-balance force, max", "penetration depth",
+                           "<svg", "overlay_worst_", "overlay_median_"})
+    EXPECT_NE(html.find(part), std::string::npos) << part;
+  for (const auto& o : j["overlays"]) EXPECT_TRUE(fs::exists(report / o["file"].get<std::string>()));
+}
+
+TEST(CaptureEvaluationIntegration, GroundTruthTranslationTakesBackAGlobalShift) {
+  const fs::path capture = perfect_capture("shifted", {1, 2, 3}, Eigen::Vector3d(0.1, 0, -0.05));
+  EvaluationOptions o = options(capture);
+  o.view = "cam01";
+  o.iou_every = 2;
+  const CaptureEvaluation moved = evaluate_capture(o);
+  const double shift_mm = std::hypot(100.0, 50.0);
+  EXPECT_NEAR(moved.cloth_error_mean_mm, shift_mm, 1e-6);
+  EXPECT_NEAR(moved.body_error_p95_mm, shift_mm, 1e-6);
+  EXPECT_NEAR(moved.mpjpe_mm, shift_mm, 1e-6);
+  EXPECT_NEAR(moved.pivot_error_mm, shift_mm, 1e-6);
+  EXPECT_LT(moved.amv_iou, 0.9);
+  EXPECT_EQ(moved.iou_frames, 2);  // frames 1 and 3
+  EXPECT_EQ(moved.oob_frames, 1);  // frame 3
+  o.gt_translation = true;
+  const CaptureEvaluation back = evaluate_capture(o);
+  EXPECT_NEAR(back.cloth_error_mean_mm, 0.0, 1e-6);
+  EXPECT_NEAR(back.mpjpe_mm, 0.0, 1e-6);
+  EXPECT_NEAR(back.pivot_error_mm, shift_mm, 1e-6);  // the error the shift took away
+  EXPECT_GT(back.amv_iou, 0.99);
+}
+
+TEST(CaptureEvaluationIntegration, SkirtMovedIntoTheBodyPenetrates) {
+  // The skirt alone moved 3 cm sideways: its vertices on that side go into the hips and legs.
+  const fs::path capture = perfect_capture("into_body", {3, 4}, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.03, 0, 0));
+  const CaptureEvaluation e = evaluate_capture(options(capture));
+  EXPECT_NEAR(e.cloth_error_mean_mm, 30.0, 1e-6);
+  EXPECT_EQ(e.body_error_mean_mm, 0.0);
+  EXPECT_EQ(e.gt_penetration_max_mm, 0.0);
+  EXPECT_GT(e.penetrating_fraction, 0.01);
+  EXPECT_GT(e.penetration_mean_mm, 0.0);
+  EXPECT_LE(e.penetration_mean_mm, e.penetration_max_mm);
+  EXPECT_LT(e.penetration_max_mm, 30.0);  // no deeper than the move
+  std::printf("skirt moved 3 cm sideways: %.2f %% of its vertices inside, %.2f mm mean, %.2f mm max\n",
+              100 * e.penetrating_fraction, e.penetration_mean_mm, e.penetration_max_mm);
+}
+
+TEST(CaptureEvaluationIntegration, WithoutSynthConfigTheForceIsSkippedAndSaidSo) {
+  const fs::path capture = perfect_capture("no_synth", {0, 1, 2});
+  nlohmann::json j = nlohmann::json::parse(slurp(capture / "capture.json"));
+  j["synth_config"] = "";
+  std::ofstream(capture / "capture.json") << j.dump();
+  const CaptureEvaluation e = evaluate_capture(options(capture));
+  EXPECT_EQ(e.oob_frames, 0);
+  EXPECT_TRUE(std::isnan(e.oob_n.mean));
+  ASSERT_FALSE(e.notes.empty());
+  EXPECT_NE(e.notes.front().find("--synth-config"), std::string::npos);
+  // --synth-config supplies it.
+  EvaluationOptions o = options(capture);
+  o.synth_config = repo_file("configs/synth/tiny.yaml");
+  EXPECT_EQ(evaluate_capture(o).oob_frames, 1);
+}
+
+TEST(CaptureEvaluationIntegration, BadCaptureFoldersAreErrorsNamingTheFile) {
+  const fs::path capture = perfect_capture("bad", {2, 3});
+  // A frame the dataset does not have.
+  {
+    nlohmann::json j = nlohmann::json::parse(slurp(capture / "capture.json"));
+    const std::string good = j.dump();
+    j["frames"][1]["id"] = 99;
+    std::ofstream(capture / "capture.json") << j.dump();
+    expect_error([&] { evaluate_capture(options(capture)); },
+                 {"capture.json", "frames[1]", "id 99 is not a frame of the dataset", "0..5"});
+    std::ofstream(capture / "capture.json") << good;
+  }
+  // A view the dataset does not have.
+  EvaluationOptions o = options(capture);
+  o.view = "wild";
+  expect_error([&] { evaluate_capture(o); }, {"'wild'", "--view", "dataset.yaml", "cam00"});
+  // A mesh of the wrong vertex count.
+  const fs::path cloth = capture / "meshes" / "cloth_0003.ply";
+  TriangleMesh mesh = read_ply(cloth.string());
+  const TriangleMesh original = mesh;
+  mesh.V.conservativeResize(mesh.V.rows() - 1, 3);
+  mesh.F.resize(0, 3);
+  write_ply(cloth.string(), mesh);
+  expect_error([&] { evaluate_capture(options(capture)); },
+               {"cloth_0003.ply", std::to_string(original.V.rows() - 1) + " vertices, expected " +
+                                      std::to_string(original.V.rows())});
+  // A missing mesh.
+  fs::remove(cloth);
+  expect_error([&] { evaluate_capture(options(capture)); }, {"cloth_0003.ply", "missing", "frame 3"});
+  write_ply(cloth.string(), original);
+  // pose.motion with a row too few.
+  Motion m = read_motion((capture / "pose.motion").string());
+  m.dofs.conservativeResize(1, m.dofs.cols());
+  m.frame_ids.resize(1);
+  write_motion((capture / "pose.motion").string(), m);
+  expect_error([&] { evaluate_capture(options(capture)); }, {"pose.motion", "1 rows, expected 2"});
+  // No capture.json.
+  fs::remove(capture / "capture.json");
+  expect_error([&] { evaluate_capture(options(capture)); }, {"capture.json", "missing"});
+}
+
+TEST(CaptureEvaluationIntegration, CommandWritesTheReport) {
+  const fs::path capture = perfect_capture("command", {0, 1, 2, 3});
+  const fs::path report = scratch_root() / "report_command";
+  const std::string cmd = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " + capture.string() +
+                          " --data " + tiny().string() + " --out " + report.string() +
+                          " --view cam05 --iou-every 2 > " +
+                          (scratch_root() / "eval.out").string() + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(scratch_root() / "eval.out");
+  const nlohmann::json j = nlohmann::json::parse(slurp(report / "metrics.json"));
+  EXPECT_EQ(j["view"], "cam05");
+  EXPECT_EQ(j["summary"]["iou"]["frames"], 2);
+  EXPECT_TRUE(fs::exists(report / "report.html"));
+  const std::string log = slurp(scratch_root() / "eval.out");
+  EXPECT_NE(log.find("AMVIoU"), std::string::npos) << log;
+  // A missing prediction folder: one error naming it, and no report written.
+  const fs::path nothing = scratch_root() / "report_nothing";
+  const std::string bad = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " +
+                          (scratch_root() / "no_capture").string() + " --data " + tiny().string() + " --out " +
+                          nothing.string() + " > " + (scratch_root() / "bad.out").string() + " 2>&1";
+  const int bad_status = std::system(bad.c_str());
+  EXPECT_TRUE(WIFEXITED(bad_status) && WEXITSTATUS(bad_status) == 1);
+  EXPECT_NE(slurp(scratch_root() / "bad.out").find("no_capture: no such capture folder"), std::string::npos);
+  EXPECT_FALSE(fs::exists(nothing / "report.html"));
+}
