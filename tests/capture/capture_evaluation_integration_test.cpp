@@ -22,6 +22,7 @@
 #include "capture/io/mesh_io.h"
 #include "capture/studio/synthetic_studio.h"
 #include "capture/training/capture_networks.h"
+#include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
@@ -32,25 +33,10 @@ using weft::capture::testing::slurp;
 
 namespace {
 
-fs::path scratch_root() { return fs::temp_directory_path() / ("weft_eval_test_" + std::to_string(::getpid())); }
+fs::path scratch_root() { return weft::capture::testing::process_scratch("eval"); }
 
-// The tiny dataset, written once per test program and removed at exit.
-const fs::path& tiny() {
-  static std::unique_ptr<fs::path> dir;
-  if (!dir) {
-    fs::remove_all(scratch_root());
-    fs::create_directories(scratch_root());
-    dir = std::make_unique<fs::path>(scratch_root() / "tiny");
-    synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), dir->string());
-    static struct Cleanup {
-      ~Cleanup() {
-        std::error_code ec;
-        fs::remove_all(scratch_root(), ec);
-      }
-    } cleanup;
-  }
-  return *dir;
-}
+// The tiny dataset (shared_fixture.h).
+fs::path tiny() { return weft::capture::testing::tiny_dataset(); }
 
 // A capture folder holding the dataset's ground truth for `frames`, every mesh, joint and
 // pivot moved by `offset` (character units).

@@ -36,22 +36,7 @@ using weft::capture::testing::repo_file;
 
 namespace {
 
-// This process's scratch folder, removed at exit.
-fs::path scratch_root() {
-  static const fs::path root = [] {
-    const fs::path r = fs::temp_directory_path() / ("weft_infer_test_" + std::to_string(::getpid()));
-    fs::remove_all(r);
-    fs::create_directories(r);
-    return r;
-  }();
-  static struct Cleanup {
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(root, ec);
-    }
-  } cleanup;
-  return root;
-}
+fs::path scratch_root() { return weft::capture::testing::process_scratch("infer"); }
 
 struct Fixture {
   fs::path data, model;
@@ -160,7 +145,7 @@ TEST(Infer, TheSilhouettePlacesABodyWhereItWasRendered) {
   Vertices relative = pose_character(character, character.rest_dofs).body;
   relative.rowwise() -= relative.colwise().mean();
   for (const Camera& camera : {cameras[0], cameras[3]}) {
-    for (const Eigen::Vector3d truth : {Eigen::Vector3d(0.1, 0.9, -0.2), Eigen::Vector3d(-0.3, 0.8, 0.4)}) {
+    for (const Eigen::Vector3d& truth : {Eigen::Vector3d(0.1, 0.9, -0.2), Eigen::Vector3d(-0.3, 0.8, 0.4)}) {
       const Vertices placed = relative.rowwise() + truth.transpose();
       const RenderResult r = render(camera, {{&character.body.mesh, &placed, 1}});
       const Eigen::Vector3d t = translation_from_silhouette(camera, relative, cv::boundingRect(r.mask));

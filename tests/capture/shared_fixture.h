@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -41,6 +42,27 @@ inline std::filesystem::path shared_fixture(const std::string& name,
   make(dir);
   std::ofstream(marker, std::ios::binary) << stamp.str();
   return dir;
+}
+
+// A scratch folder of this test process under the system temp dir, made on first use and
+// removed when the process exits.
+inline std::filesystem::path process_scratch(const std::string& tag) {
+  namespace fs = std::filesystem;
+  static std::map<std::string, fs::path> made;
+  static struct Cleanup {
+    ~Cleanup() {
+      std::error_code ec;
+      for (const auto& [t, dir] : made) fs::remove_all(dir, ec);
+    }
+  } cleanup;
+  auto it = made.find(tag);
+  if (it == made.end()) {
+    const fs::path dir = fs::temp_directory_path() / ("weft_" + tag + "_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    it = made.emplace(tag, dir).first;
+  }
+  return it->second;
 }
 
 // The tiny dataset (configs/synth/tiny.yaml).

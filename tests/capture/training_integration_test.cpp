@@ -40,22 +40,7 @@ namespace {
 std::string weft_binary() { return std::string(WEFT_BINARY_DIR) + "/apps/weft"; }
 
 
-// This process's scratch folder, removed at exit.
-fs::path scratch_root() {
-  static const fs::path root = [] {
-    const fs::path r = fs::temp_directory_path() / ("weft_training_test_" + std::to_string(::getpid()));
-    fs::remove_all(r);
-    fs::create_directories(r);
-    return r;
-  }();
-  static struct Cleanup {
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(root, ec);
-    }
-  } cleanup;
-  return root;
-}
+fs::path scratch_root() { return weft::capture::testing::process_scratch("training"); }
 
 struct Fixture {
   fs::path data;       // the tiny dataset (shared_fixture.h)
