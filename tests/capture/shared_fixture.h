@@ -16,6 +16,7 @@
 #include <string>
 
 #include "capture/studio/synthetic_studio.h"
+#include "capture/training/trainer.h"
 #include "tests/capture/test_files.h"
 
 namespace weft::capture::testing {
@@ -69,6 +70,22 @@ inline std::filesystem::path process_scratch(const std::string& tag) {
 inline std::filesystem::path tiny_dataset() {
   return shared_fixture("tiny", [](const std::filesystem::path& dir) {
     synthesize_dataset(load_synth_config(repo_file("configs/synth/tiny.yaml")), dir.string());
+  });
+}
+
+// An uninterrupted run of configs/train/tiny.yaml on tiny_dataset() (a model folder),
+// with what its TrainSummary said in summary.txt: simulation windows, failures, the last
+// validation's samples and silhouette IoU.
+inline std::filesystem::path tiny_reference_run() {
+  const std::filesystem::path data = tiny_dataset();
+  return shared_fixture("tiny_reference_run", [&](const std::filesystem::path& dir) {
+    TrainOptions o;
+    o.config = repo_file("configs/train/tiny.yaml");
+    o.data = data.string();
+    o.run = dir.string();
+    const TrainSummary s = train(o);
+    std::ofstream(dir / "summary.txt") << s.simulation_windows << " " << s.simulation_failures << " "
+                                       << s.last_validation.samples << " " << s.last_validation.silhouette_iou << "\n";
   });
 }
 

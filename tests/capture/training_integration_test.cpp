@@ -58,16 +58,7 @@ const Fixture& fixture() {
   if (!f) {
     f = std::make_unique<Fixture>();
     f->data = tiny_data();
-    f->reference = weft::capture::testing::shared_fixture("tiny_reference_run", [&](const fs::path& dir) {
-      TrainOptions o;
-      o.config = repo_file("configs/train/tiny.yaml");
-      o.data = f->data.string();
-      o.run = dir.string();
-      const TrainSummary s = train(o);
-      std::ofstream(dir / "summary.txt") << s.simulation_windows << " " << s.simulation_failures << " "
-                                         << s.last_validation.samples << " " << s.last_validation.silhouette_iou
-                                         << "\n";
-    });
+    f->reference = weft::capture::testing::tiny_reference_run();
     std::ifstream(f->reference / "summary.txt") >> f->simulation_windows >> f->simulation_failures >>
         f->validation_samples >> f->validation_iou;
   }
