@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
 #include <chrono>
@@ -62,6 +63,14 @@ struct FrameRecord {
   Body25 detections = Body25::Zero();
   int mapped_detections = 0;  // detected keypoints the character maps
   cv::Rect box;               // the mask's bounding box (empty: no foreground)
+};
+
+// What the writers need of a frame.
+struct FrameOutput {
+  int id = 0;
+  Camera camera;
+  Vertices body, cloth;
+  cv::Mat image;  // the input frame (overlays and video), then the overlay drawn on it
 };
 
 Vertices rows_of(const Tensor& t, int64_t b) {  // [B,V,3] → V×3 of sample b
@@ -229,9 +238,6 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   nlohmann::json frame_list = nlohmann::json::array();
   OverlayVideo video(out, fps);
   RenderOptions render_options;
-  TriangleMesh body_mesh = character.body.mesh, cloth_mesh = character.has_cloth() ? character.cloth->mesh : TriangleMesh();
-  body_mesh.colors.resize(0, 3);
-  cloth_mesh.colors.resize(0, 3);
   int written = 0;
   for (int start = 0; start < n; start += cfg.batch_size) {
     const int B = std::min(cfg.batch_size, n - start);
@@ -259,6 +265,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
     const Tensor dofs = p.dofs.to(DType::F64), R = p.rotation.to(DType::F64),
                  t = p.translation.to(DType::F64);
     clock.lap("deform");
+    std::vector<FrameOutput> outputs(static_cast<size_t>(B));
     for (int b = 0; b < B; ++b) {
       const FrameRecord& r = frames[size_t(start + b)];
       Vertices body = rows_of(p.body, b);
@@ -301,38 +308,57 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
       globals.push_back(forward_kinematics(character.skeleton, motion.dofs.row(i).transpose()));
       clock.lap("place");
 
-      const std::string id = four_digits(r.id);
-      body_mesh.V = body;
-      if (cloth.rows()) cloth_mesh.V = cloth;
-      for (const std::string& format : cfg.mesh_formats) {
-        write_mesh((out / "meshes" / ("body_" + id + "." + format)).string(), body_mesh);
-        if (cloth.rows()) write_mesh((out / "meshes" / ("cloth_" + id + "." + format)).string(), cloth_mesh);
-      }
+      FrameOutput& w = outputs[size_t(b)];
+      w.id = r.id;
+      w.camera = r.camera;
+      w.body = std::move(body);
+      w.cloth = std::move(cloth);
       if (cfg.overlays || cfg.video) {
         InputFrame f;
         WEFT_CHECK(source.next(f) && f.id == r.id, o.input, ": frame ", r.name, " could not be read again");
-        std::vector<RenderMesh> meshes = {{&character.body.mesh, &body, 1}};
-        meshes[0].color = cv::Scalar(200, 170, 140);
-        if (cloth.rows()) {
-          meshes.push_back({&character.cloth->mesh, &cloth, 2});
-          meshes[1].color = cv::Scalar(60, 120, 230);
-        }
-        const RenderResult drawn = render(r.camera, meshes, render_options);
-        cv::Mat overlay = f.bgr.clone();
-        cv::Mat blended;
-        cv::addWeighted(drawn.rgb, cfg.overlay_alpha, f.bgr, 1 - cfg.overlay_alpha, 0, blended);
-        blended.copyTo(overlay, drawn.mask);
-        if (cfg.overlays) write_png_atomically((out / "overlays" / (id + ".png")).string(), overlay);
-        if (cfg.video) video.add(overlay);
+        w.image = f.bgr;
       }
       frame_list.push_back({{"id", r.id},
                             {"source", r.name},
                             {"pivot", {translation.x(), translation.y(), translation.z()}},
                             {"translation_from", from_keypoints ? "keypoints" : r.box.empty() ? "none" : "silhouette"}});
       if (resolver) frame_list.back()["collisions"] = collisions;
-      clock.lap("write");
+      clock.lap("read");
+    }
+    // The batch's files, frames in parallel (the networks are done: both cores are free).
+    tbb::parallel_for(0, B, [&](int b) {
+      FrameOutput& w = outputs[size_t(b)];
+      const std::string id = four_digits(w.id);
+      TriangleMesh body_mesh = character.body.mesh, cloth_mesh;
+      body_mesh.colors.resize(0, 3);
+      body_mesh.V = w.body;
+      if (w.cloth.rows()) {
+        cloth_mesh = character.cloth->mesh;
+        cloth_mesh.colors.resize(0, 3);
+        cloth_mesh.V = w.cloth;
+      }
+      for (const std::string& format : cfg.mesh_formats) {
+        write_mesh((out / "meshes" / ("body_" + id + "." + format)).string(), body_mesh);
+        if (w.cloth.rows()) write_mesh((out / "meshes" / ("cloth_" + id + "." + format)).string(), cloth_mesh);
+      }
+      if (w.image.empty()) return;
+      std::vector<RenderMesh> meshes = {{&character.body.mesh, &w.body, 1}};
+      meshes[0].color = cv::Scalar(200, 170, 140);
+      if (w.cloth.rows()) {
+        meshes.push_back({&character.cloth->mesh, &w.cloth, 2});
+        meshes[1].color = cv::Scalar(60, 120, 230);
+      }
+      const RenderResult drawn = render(w.camera, meshes, render_options);
+      cv::Mat blended;
+      cv::addWeighted(drawn.rgb, cfg.overlay_alpha, w.image, 1 - cfg.overlay_alpha, 0, blended);
+      blended.copyTo(w.image, drawn.mask);
+      if (cfg.overlays) write_png_atomically((out / "overlays" / (id + ".png")).string(), w.image);
+    });
+    for (int b = 0; b < B; ++b) {
+      if (cfg.video && !outputs[size_t(b)].image.empty()) video.add(outputs[size_t(b)].image);
       if (progress) progress("meshes", ++written, n);
     }
+    clock.lap("write");
   }
   (void)param;
   write_motion((out / "pose.motion").string(), motion);
