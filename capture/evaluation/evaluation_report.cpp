@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "capture/io/atomic_file.h"
+#include "capture/io/png_file.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -236,10 +237,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
     written.push_back(path);
   };
   for (const EvaluationOverlay& o : e.overlays) {
-    std::vector<uchar> png;
-    WEFT_CHECK(cv::imencode(".png", o.image, png), overlay_file(o), ": PNG encoding failed");
     const std::string path = (fs::path(dir) / overlay_file(o)).string();
-    write_bytes_atomically(path, png.data(), png.size());
+    write_png_atomically(path, o.image);
     written.push_back(path);
   }
   write_text("metrics.json", e.to_json());
