@@ -30,6 +30,9 @@ struct TrainOptions {
   // instead of a fresh initialisation: domain adaptation refines a trained model. A
   // resumed run ignores it (its checkpoint holds the weights).
   std::string init_weights;
+  // Write RUN/parameters.csv: per step a checksum of every parameter and batch-norm
+  // statistic (data-parallel runs check that all ranks hold the same).
+  bool parameter_checksums = false;
 };
 
 struct TrainProgress {
