@@ -42,9 +42,8 @@ void DataParallel::begin_shard() {
   for (size_t i = 0; i < buffers_.size(); ++i) buffers_[i].tensor.copy_from(snapshot_[i]);
 }
 
-void DataParallel::end_shard(double weight) {
+void DataParallel::end_shard() {
   if (!active()) return;
-  const float w = float(weight);
   float* acc = gradients_.data();
   float* counts = gradients_.data() + gradient_elements_;
   for (size_t i = 0; i < parameters_.size(); ++i) {
@@ -52,7 +51,9 @@ void DataParallel::end_shard(double weight) {
     const Tensor g = p.grad();
     if (g.defined()) {
       const float* d = g.data<float>();
-      for (int64_t k = 0; k < p.numel(); ++k) acc[k] += w * d[k];
+      // A plain sum, as the all-reduce's: a product here would be fused into an FMA,
+      // which rounds differently from the all-reduce's sum of rounded products.
+      for (int64_t k = 0; k < p.numel(); ++k) acc[k] += d[k];
       counts[i] += 1;
     }
     acc += p.numel();
@@ -107,9 +108,17 @@ uint64_t state_checksum(const Module& module) {
   uint64_t h = 1469598103934665603ull;
   auto mix = [&](const std::vector<NamedTensor>& tensors) {
     for (const NamedTensor& t : tensors) {
-      const Tensor& c = t.tensor;  // parameters and buffers own contiguous storage
-      const auto* bytes = static_cast<const unsigned char*>(c.raw_data());
-      for (size_t i = 0; i < c.nbytes(); ++i) h = (h ^ bytes[i]) * 1099511628211ull;
+      // Parameters and buffers own contiguous storage; 8 bytes a round (a byte a round
+      // is 8× slower on a network's 100 MB), the tail byte by byte.
+      const auto* bytes = static_cast<const unsigned char*>(t.tensor.raw_data());
+      const size_t n = t.tensor.nbytes();
+      size_t i = 0;
+      for (; i + 8 <= n; i += 8) {
+        uint64_t word;
+        std::memcpy(&word, bytes + i, 8);
+        h = (h ^ word) * 1099511628211ull;
+      }
+      for (; i < n; ++i) h = (h ^ bytes[i]) * 1099511628211ull;
     }
   };
   mix(module.named_parameters());

@@ -6,8 +6,8 @@
 // holding samples [⌊j·B/S⌋, ⌊(j+1)·B/S⌋) (shard_range). The S shards are spread over the
 // ranks of a ProcessGroup, S/N consecutive shards per rank. Each shard runs its own
 // forward and backward (batch norm normalises with the shard's statistics, as DDP's
-// default does), and the step's gradient is
-//   g = Σ_j w_j g_j,   w_j = n_j / B   (n_j: shard j's samples; g_j: its loss's gradient),
+// default does) of its loss weighted by its share of the batch, and the step's gradient is
+//   g = Σ_j ∇(w_j L_j),   w_j = n_j / B   (n_j: shard j's samples; L_j: its loss),
 // summed in float32 over the process's shards in order, then over the ranks with one
 // MPI all-reduce (in buckets). Every rank then holds the same g and its optimiser takes
 // the same step, so the parameters stay identical on all ranks. The batch-norm running
@@ -45,11 +45,12 @@ class DataParallel {
   // True when a step is more than one plain forward and backward.
   bool active() const { return shards_ > 1; }
 
-  // Call once per step, then for each local shard begin_shard(), its forward and backward,
-  // end_shard(w_j); then finish_step() before the optimiser's step.
+  // Call once per step, then for each local shard begin_shard(), its forward and the
+  // backward of w_j L_j (gradients zeroed first), end_shard(); then finish_step() before
+  // the optimiser's step.
   void begin_step();
   void begin_shard();
-  void end_shard(double weight);
+  void end_shard();
   // Sums the gradients over the ranks and writes them to the parameters (a parameter no
   // shard gave a gradient keeps none); averages the buffers. Seconds spent in the
   // all-reduces are added to all_reduce_seconds().
@@ -63,13 +64,13 @@ class DataParallel {
   std::vector<NamedTensor> parameters_, buffers_;
   int shards_;
   int64_t gradient_elements_ = 0;
-  std::vector<float> gradients_;      // Σ w_j g_j, then one count per parameter of shards that had a gradient
+  std::vector<float> gradients_;      // Σ_j ∇(w_j L_j), then one count per parameter of shards that had a gradient
   std::vector<Tensor> snapshot_;      // the buffers at the step's start
   std::vector<double> buffer_sums_;   // Σ over shards of each buffer's value after its shard
   double all_reduce_seconds_ = 0;
 };
 
-// FNV-1a over the bytes of every parameter and buffer of `module`, in name order: equal
+// FNV-1a (over 8-byte words) of every parameter and buffer of `module`, in name order: equal
 // on two processes exactly when their states are bit-identical.
 uint64_t state_checksum(const Module& module);
 

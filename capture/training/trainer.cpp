@@ -380,9 +380,9 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
     WEFT_CHECK(total.defined(), cfg_.file, ": stages.", stage_name(stage.kind), ": every loss weight is 0");
     add("total", share, total.item());
     opt.zero_grad();
-    total.backward();
+    (dp.active() ? ops::scale(total, share) : total).backward();
     times.lap("backward", t);
-    dp.end_shard(share);
+    dp.end_shard();
   }
   // The step's figures over all ranks, in one small all-reduce: what rank 0 logs, and
   // what every rank checks before its optimiser steps.
