@@ -78,7 +78,7 @@ void run_train(const capture::TrainOptions& o) {
     if (group.distributed()) {
       spdlog::error("{}: {}", group.describe(), e.what());
       spdlog::default_logger()->flush();
-      group.abort(e.what());
+      group.abort("");
     }
     if (group.is_root()) spdlog::default_logger()->sinks().pop_back();
     group.finalize();

@@ -229,7 +229,7 @@ void ProcessGroup::barrier(const char* what) {
 }
 
 void ProcessGroup::abort(const std::string& message, int code) {
-  std::fprintf(stderr, "weft: %s: %s\n", describe().c_str(), message.c_str());
+  if (!message.empty()) std::fprintf(stderr, "weft: %s: %s\n", describe().c_str(), message.c_str());
   std::fflush(stderr);
 #ifdef WEFT_WITH_MPI
   if (mpi_ && !finalized_) MPI_Abort(MPI_COMM_WORLD, code);

@@ -50,8 +50,8 @@ class ProcessGroup {
   void broadcast(std::span<int64_t> values, int root, const char* what);
   void barrier(const char* what);
 
-  // Logs `message` with this rank's name to stderr and ends every rank of the job (exit
-  // code `code`). One rank alone: exits.
+  // Writes `message` (unless empty: the caller logged it) with this rank's name to stderr
+  // and ends every rank of the job (exit code `code`). One rank alone: exits.
   [[noreturn]] void abort(const std::string& message, int code = 1);
   // Ends MPI cleanly (every rank calls it once, at the end); no-op without MPI.
   void finalize();
