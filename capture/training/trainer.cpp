@@ -741,7 +741,7 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const T
   } else if (nn::ProcessGroup::world().is_root()) {
     write_text_atomically(saved.string(), text);
   }
-  write_model_folder(options.run, options.config, options.data);
+  if (nn::ProcessGroup::world().is_root()) write_model_folder(options.run, options.config, options.data);
   Trainer trainer(options, cfg);
   return trainer.run(progress);
 }
