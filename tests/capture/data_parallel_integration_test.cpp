@@ -8,7 +8,8 @@
 // - SIGKILL of rank 1 ends rank 0 and mpirun within a bounded time, with a message naming
 //   rank 1;
 // - `mpirun -np 2 weft train --resume` then continues exactly: the whole losses.csv and
-//   parameters.csv equal the uninterrupted reference's.
+//   parameters.csv equal the uninterrupted reference's;
+// - SIGSTOP of rank 1 (a hang) ends the job once rank 0 has waited WEFT_MPI_TIMEOUT_S.
 // Skipped, with the reason, when weft was built without MPI or mpirun is not on PATH.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -86,7 +87,7 @@ struct Mpirun {
 
 // `mpirun -np 2 weft train --threads 1 ...` in the background.
 Mpirun start_mpirun(const std::string& mpirun, const std::string& config, const fs::path& data, const fs::path& run,
-                    bool resume) {
+                    bool resume, const char* timeout_s = nullptr) {
   Mpirun m;
   m.output = run.string() + (resume ? ".resume.out" : ".out");
   const std::string bin = std::string(WEFT_BINARY_DIR) + "/apps/weft";
@@ -97,9 +98,10 @@ Mpirun start_mpirun(const std::string& mpirun, const std::string& config, const 
     // Containers run tests as root; a machine with one core still gets two ranks.
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
     ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
-    std::vector<std::string> args = {mpirun, "-np", "2", "--oversubscribe", bin, "train", "--threads", "1",
-                                     "--config", config, "--data", data.string(), "--out", run.string(),
-                                     "--parameter-checksums"};
+    if (timeout_s) ::setenv("WEFT_MPI_TIMEOUT_S", timeout_s, 1);
+    std::vector<std::string> args = {mpirun, "-np", "2", "--oversubscribe", "-x", "WEFT_MPI_TIMEOUT_S", bin, "train",
+                                     "--threads", "1", "--config", config, "--data", data.string(), "--out",
+                                     run.string(), "--parameter-checksums"};
     if (resume) args.push_back("--resume");
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
@@ -155,7 +157,7 @@ int64_t last_logged_step(const fs::path& run) {
 
 }  // namespace
 
-TEST(DataParallel, TwoRanksMatchTwoShardsOnOneProcessAndSurviveTheDeathOfARank) {
+TEST(DataParallel, TwoRanksMatchTwoShardsOnOneProcessAndSurviveTheDeathOrHangOfARank) {
   SKIP_WITHOUT_HUMAN();
   if (!weft::nn::ProcessGroup::built_with_mpi())
     GTEST_SKIP() << "weft was built without MPI (WEFT_WITH_MPI off: libopenmpi-dev was missing at configure time; "
@@ -222,4 +224,25 @@ TEST(DataParallel, TwoRanksMatchTwoShardsOnOneProcessAndSurviveTheDeathOfARank) 
   EXPECT_EQ(std::count(checksums.begin(), checksums.end(), '\n'), 7) << checksums;  // header and 6 steps
   EXPECT_EQ(checksums, slurp(fs::path(o.run) / "parameters.csv"));
   EXPECT_TRUE(fs::exists(run / "model.safetensors"));
+
+  // A rank that hangs (SIGSTOP: alive, silent) ends the job once the other has waited
+  // WEFT_MPI_TIMEOUT_S in a collective.
+  const fs::path hung = root / "hung";
+  Mpirun third = start_mpirun(mpirun, config, data, hung, false, "3");
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (last_logged_step(hung) < 1 && std::chrono::steady_clock::now() < until && wait_for(third.pid, 0.02) == -1) {
+  }
+  ASSERT_GE(last_logged_step(hung), 1) << slurp(third.output);
+  const pid_t stopped = rank_pid(third.pid, 1);
+  ASSERT_GT(stopped, 0);
+  ::kill(stopped, SIGSTOP);
+  const auto stopped_at = std::chrono::steady_clock::now();
+  const int ended = wait_for(third.pid, 30);
+  if (ended == -1) ::kill(stopped, SIGKILL), ::kill(third.pid, SIGKILL), ::waitpid(third.pid, nullptr, 0);
+  ASSERT_NE(ended, -1) << "rank 1 was stopped and the job was still running 30 s later";
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - stopped_at).count();
+  EXPECT_GE(waited, 2.5);
+  EXPECT_NE(slurp(third.output).find("rank 0 of 2"), std::string::npos) << slurp(third.output);
+  EXPECT_NE(slurp(third.output).find("waited 3 s in the collective"), std::string::npos) << slurp(third.output);
+  std::cout << "mpirun ended " << waited << " s after rank 1 was stopped (timeout 3 s)\n";
 }
