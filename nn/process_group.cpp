@@ -156,7 +156,7 @@ ProcessGroup::ProcessGroup() {
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
 #else
   if (launcher_size() > 1)
-    fail("weft was built without MPI (CMake option WEFT_WITH_MPI off: libopenmpi-dev missing at configure time) "
+    fail("weft was built without MPI (CMake option WEFT_WITH_MPI off, or no MPI found at configure time) "
          "but was started as rank ", launcher_rank(), " of ", launcher_size(),
          " by an MPI launcher; each rank would train alone. Rebuild with MPI (scripts/setup.sh installs it) or run "
          "one process");
