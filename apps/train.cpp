@@ -80,9 +80,8 @@ void run_train(const capture::TrainOptions& o) {
       spdlog::default_logger()->flush();
       group.abort("");
     }
-    if (group.is_root()) spdlog::default_logger()->sinks().pop_back();
     group.finalize();
-    throw;
+    throw;  // main logs it, to train.log too (the file sink stays)
   }
   if (group.is_root()) spdlog::default_logger()->sinks().pop_back();
   group.finalize();
