@@ -612,6 +612,8 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     spdlog::info("data parallel: {} ranks, {} shards per global batch ({} per rank), each with its own batch-norm "
                  "statistics; gradients and statistics averaged over the shards",
                  group_.size(), shards_, shards_ / group_.size());
+  for (const StageConfig& s : cfg_.stages)  // before the first step, not at the stage
+    if (s.steps > 0) check_shards(s);
   const int64_t total = cfg_.total_steps();
   const int64_t last_step = options_.stop_after >= 0 ? std::min(total, options_.stop_after) : total;
   summary.first_step = done + 1;
@@ -633,7 +635,6 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
         opt = make_optimizer(s);
       }
       setup_stage = &s;
-      check_shards(s);
       dp = make_data_parallel(s, *opt);
       spdlog::info("stage {}: steps {}–{}, batch {}, lr {}", stage_name(s.kind), stage_start + 1,
                    stage_start + s.steps, s.batch_size, s.lr);
