@@ -14,6 +14,8 @@
 #include "capture/training/split_evaluation.h"
 #include "capture/training/trainer.h"
 #include "graph/error.h"
+#include "graph/threads.h"
+#include "nn/process_group.h"
 
 namespace weft::apps {
 
@@ -40,11 +42,7 @@ void run_evaluation(const capture::TrainOptions& o, const std::string& split) {
   spdlog::info("wrote {}", out);
 }
 
-void run_train(const capture::TrainOptions& o) {
-  std::filesystem::create_directories(o.run);
-  auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>((std::filesystem::path(o.run) / "train.log").string());
-  spdlog::default_logger()->sinks().push_back(file);
-  spdlog::info("weft train --config {} --data {} --out {}{}", o.config, o.data, o.run, o.resume ? " --resume" : "");
+void train_and_report(const capture::TrainOptions& o) {
   std::unique_ptr<ProgressBar> bar;
   std::string bar_stage;
   const capture::TrainSummary s = capture::train(o, [&](const capture::TrainProgress& p) {
@@ -59,7 +57,34 @@ void run_train(const capture::TrainOptions& o) {
   for (const auto& [status, count] : s.failure_statuses)
     spdlog::info("  simulation windows that stopped with '{}': {}", status, count);
   spdlog::info("run folder {}: losses.csv, losses.png, validation.csv, checkpoints/, train.log", o.run);
-  spdlog::default_logger()->sinks().pop_back();
+}
+
+// Under mpirun every rank runs this; rank 0 alone logs (train.log, the progress bar) and
+// writes files. An error on any rank ends the whole job with the rank's name.
+void run_train(const capture::TrainOptions& o) {
+  nn::ProcessGroup& group = nn::ProcessGroup::world();
+  if (!group.is_root()) spdlog::set_level(spdlog::level::warn);
+  std::filesystem::create_directories(o.run);
+  if (group.is_root()) {
+    auto file = std::make_shared<spdlog::sinks::basic_file_sink_mt>((std::filesystem::path(o.run) / "train.log").string());
+    spdlog::default_logger()->sinks().push_back(file);
+  }
+  spdlog::info("weft train --config {} --data {} --out {}{} ({} thread{} per rank{})", o.config, o.data, o.run,
+               o.resume ? " --resume" : "", num_threads(), num_threads() == 1 ? "" : "s",
+               group.distributed() ? fmt::format(", {} ranks", group.size()) : std::string());
+  try {
+    train_and_report(o);
+  } catch (const std::exception& e) {
+    if (group.distributed()) {
+      spdlog::error("{}: {}", group.describe(), e.what());
+      spdlog::default_logger()->flush();
+      group.abort("");
+    }
+    group.finalize();
+    throw;  // main logs it, to train.log too (the file sink stays)
+  }
+  if (group.is_root()) spdlog::default_logger()->sinks().pop_back();
+  group.finalize();
 }
 
 }  // namespace
@@ -81,12 +106,25 @@ void add_train_command(CLI::App& app) {
   cmd->add_flag("--resume", o->resume, "Continue the run in --out from its last checkpoint, exactly");
   cmd->add_option("--stop-after", o->stop_after, "Stop after this global step (checkpointed), as if interrupted")
       ->check(CLI::NonNegativeNumber);
+  auto threads = std::make_shared<int>(0);
+  cmd->add_option("--threads", *threads,
+                  "Threads of this process (under mpirun: per rank) for OpenMP and TBB; 0: the global --threads, "
+                  "WEFT_NUM_THREADS or all cores. With N ranks on a machine of C cores, use C / N")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--parameter-checksums", o->parameter_checksums,
+                "Write RUN/parameters.csv: per step a checksum of both networks' parameters and batch-norm "
+                "statistics (under mpirun every step checks that all ranks hold the same)");
   auto evaluate = std::make_shared<std::string>();
   cmd->add_option("--evaluate", *evaluate,
                   "Instead of training: measure RUN/model.safetensors on this split of --data (e.g. test) against "
                   "its 3D ground truth (keypoints, joints, silhouette IoU, penetration, out-of-balance force); "
                   "writes RUN/evaluation_SPLIT.json");
-  cmd->callback([o, evaluate] {
+  cmd->footer(
+      "\nOn a cluster (docs/TRAINING.md, \"On a cluster\"): mpirun -np N weft train ... --threads T runs N\n"
+      "data-parallel ranks: each computes a shard of every batch and the gradients are averaged\n"
+      "(MPI all-reduce); rank 0 writes the run folder, which must be on a file system all ranks see.");
+  cmd->callback([o, evaluate, threads] {
+    if (*threads > 0) set_num_threads(*threads);
     if (!evaluate->empty())
       run_evaluation(*o, *evaluate);
     else

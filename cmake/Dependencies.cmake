@@ -24,3 +24,12 @@ endif()
 if(WEFT_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+
+# MPI (Debian's OpenMPI: libopenmpi-dev, openmpi-bin) for data-parallel `weft train`
+# across processes and machines (nn/process_group.h); optional: on when found.
+find_package(MPI COMPONENTS CXX QUIET)
+option(WEFT_WITH_MPI "Data-parallel training over MPI (on when MPI is found)" ${MPI_CXX_FOUND})
+if(WEFT_WITH_MPI AND NOT MPI_CXX_FOUND)
+  message(FATAL_ERROR "WEFT_WITH_MPI is on but no MPI was found (scripts/setup.sh installs libopenmpi-dev)")
+endif()
+message(STATUS "weft: data-parallel training over MPI: ${WEFT_WITH_MPI}")

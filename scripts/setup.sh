@@ -12,6 +12,9 @@ packages=(
   # one thread per simulation (physics/cholmod_solver.cpp). The serial and OpenMP builds
   # are not safe for weft's parallel simulations.
   libopenblas0-pthread
+  # MPI for data-parallel `weft train` over several processes or machines (optional at
+  # build time: CMake's WEFT_WITH_MPI is on when it is found).
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -486,7 +486,25 @@ Batch make_batch(const std::vector<Sample>& samples) {
     batch.views.push_back(s.view);
     batch.cameras.push_back(s.crop_camera);
   }
+  batch.whole_size = int(B);
   return batch;
+}
+
+Batch batch_rows(const Batch& batch, int first, int last) {
+  if (first < 0 || last > batch.size() || first >= last)
+    fail("batch_rows: rows [", first, ", ", last, ") of a batch of ", batch.size());
+  Batch out;
+  out.epoch = batch.epoch;
+  out.whole_size = batch.whole_size;
+  out.indices.assign(batch.indices.begin() + first, batch.indices.begin() + last);
+  out.frames.assign(batch.frames.begin() + first, batch.frames.begin() + last);
+  out.views.assign(batch.views.begin() + first, batch.views.begin() + last);
+  out.cameras.assign(batch.cameras.begin() + first, batch.cameras.begin() + last);
+  out.images = batch.images.slice_view(0, first, last).clone();
+  out.keypoints = batch.keypoints.slice_view(0, first, last).clone();
+  out.masks = batch.masks.slice_view(0, first, last).clone();
+  out.dt = batch.dt.slice_view(0, first, last).clone();
+  return out;
 }
 
 // ------------------------------------------------------------------------ DatasetPrefetcher
@@ -497,6 +515,10 @@ PrefetchOptions checked(const PrefetchOptions& o) {
   if (o.batches_ahead < 1) fail("DatasetPrefetcher: batches_ahead must be ≥ 1, got ", o.batches_ahead);
   if (o.loader_threads < 0) fail("DatasetPrefetcher: loader_threads must be ≥ 0, got ", o.loader_threads);
   if (o.first_batch < 0) fail("DatasetPrefetcher: first_batch must be ≥ 0, got ", o.first_batch);
+  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
+    fail("DatasetPrefetcher: shard ", o.shard, " of ", o.shards, " does not exist");
+  if (o.batch_size < o.shards)
+    fail("DatasetPrefetcher: a batch of ", o.batch_size, " cannot be cut into ", o.shards, " non-empty shards");
   return o;
 }
 
@@ -535,9 +557,16 @@ void DatasetPrefetcher::schedule(int64_t batch) {
     order_epoch_ = epoch;
   }
   const int64_t last = std::min<int64_t>(first + options_.batch_size, int64_t(order_.size()));
+  const int64_t n = last - first;
+  if (n < options_.shards)
+    fail("DatasetPrefetcher: batch ", batch, " of ", n, " samples cannot be cut into ", options_.shards,
+         " non-empty shards");
+  const int64_t shard_first = first + n * options_.shard / options_.shards,
+                shard_last = first + n * (options_.shard + 1) / options_.shards;
   Slot slot;
   slot.epoch = epoch;
-  slot.indices.assign(order_.begin() + first, order_.begin() + last);
+  slot.whole_size = int(n);
+  slot.indices.assign(order_.begin() + shard_first, order_.begin() + shard_last);
   {
     std::lock_guard<std::mutex> lock(mutex_);
     slots_.emplace(batch, std::move(slot));
@@ -610,6 +639,7 @@ Batch DatasetPrefetcher::next() {
   ++next_batch_;
   while (scheduled_ < next_batch_ + options_.batches_ahead) schedule(scheduled_);
   if (taken.error) std::rethrow_exception(taken.error);
+  taken.batch.whole_size = taken.whole_size;
   return std::move(taken.batch);
 }
 

@@ -185,11 +185,14 @@ struct Batch {
   std::vector<std::string> views;
   std::vector<Camera> cameras;  // crop cameras
   Tensor images, keypoints, masks, dt;
+  int whole_size = 0;           // samples of the whole batch when this is one shard of it (DatasetPrefetcher)
   int size() const { return static_cast<int>(indices.size()); }
 };
 
 // Throws weft::Error for an empty list or samples of different sizes.
 Batch make_batch(const std::vector<Sample>& samples);
+// Samples [first, last) of a batch (copies; whole_size is kept).
+Batch batch_rows(const Batch& batch, int first, int last);
 
 struct PrefetchOptions {
   int batch_size = 8;
@@ -199,6 +202,10 @@ struct PrefetchOptions {
                            // TBB's thread limit, e.g. a tbb::global_control, minus the caller)
   bool drop_last = false;  // drop an epoch's last, smaller batch
   int64_t first_batch = 0; // the stream's batch the first next() returns (a resumed run)
+  // Data parallelism (nn/data_parallel.h): load only shard `shard` of `shards` of every
+  // batch, samples [⌊shard·n/shards⌋, ⌊(shard+1)·n/shards⌋) of its n; the batches and
+  // their order are those of the unsharded stream.
+  int shard = 0, shards = 1;
 };
 
 // Shuffled batches of a dataset, loaded ahead on TBB threads. Batch k of the stream is
@@ -225,6 +232,7 @@ class DatasetPrefetcher {
   struct Slot {
     enum class State { pending, loading, ready } state = State::pending;
     int64_t epoch = 0;
+    int whole_size = 0;  // the whole batch's samples (indices: this process's shard of them)
     std::vector<int> indices;
     Batch batch;
     std::exception_ptr error;

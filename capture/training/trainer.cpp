@@ -26,10 +26,12 @@
 #include "graph/autograd.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
+#include "nn/data_parallel.h"
 #include "nn/optim.h"
 #include "nn/schedule.h"
 #include "ops/geometry.h"
 #include "ops/ops.h"
+#include "physics/newton_solver.h"
 #include "physics/simulation_window.h"
 
 namespace weft::capture {
@@ -78,7 +80,10 @@ class Trainer {
   Trainer(const TrainOptions& options, const TrainingConfig& config)
       : options_(options), cfg_(config), info_(read_dataset_info(options.data)),
         character_(load_character(info_.character)), model_(character_, cfg_.network),
-        nets_(character_, cfg_.network, cfg_.seed), faces_(combined_faces(character_)) {
+        nets_(character_, cfg_.network, cfg_.seed), faces_(combined_faces(character_)),
+        shards_(cfg_.shards > 0 ? cfg_.shards : group_.size()) {
+    WEFT_CHECK(shards_ % group_.size() == 0, cfg_.file, ": shards: ", shards_, " cannot be spread evenly over the ",
+               group_.size(), " ranks of this job (mpirun -np); use a multiple of the ranks, or 0 for one per rank");
     DatasetOptions d;
     d.input_size = cfg_.network.input_size;
     d.margin = cfg_.network.margin;
@@ -125,6 +130,12 @@ class Trainer {
     int windows = 0, failures = 0;
     std::map<std::string, int> failure_statuses;  // the first failed step's status per failed window
   };
+  // Averages the gradients of what `opt` steps, and the batch-norm statistics of the
+  // network the stage trains, over the shards of every batch and the ranks.
+  std::unique_ptr<nn::DataParallel> make_data_parallel(const StageConfig& stage, const nn::Optimizer& opt) {
+    const auto& net = stage.kind == StageKind::pose ? nets_.pose_net : nets_.deformation_net;
+    return std::make_unique<nn::DataParallel>(group_, opt.params(), net->named_buffers(), shards_);
+  }
   std::unique_ptr<nn::Optimizer> make_optimizer(const StageConfig& stage) {
     nn::AdamWOptions o;
     o.lr = stage.lr;
@@ -138,9 +149,13 @@ class Trainer {
   CapturePrediction forward(const Batch& batch, StageKind stage, bool training, PartTimes* times = nullptr);
   std::map<std::string, Tensor> image_and_regulariser_terms(const CapturePrediction& p, const Batch& batch,
                                                             const LossWeights& w, LandmarkStatistics* stats);
-  StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, const Batch& batch,
-                        PartTimes& times);
-  Batch physics_batch(int64_t step, const StageConfig& stage, bool parallel) const;
+  // One step on this process's shards of the global batch (one, without data parallelism).
+  StepResult train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt, nn::DataParallel& dp,
+                        const std::vector<Batch>& shards, PartTimes& times);
+  std::vector<Batch> physics_shards(int64_t step, const StageConfig& stage, bool parallel) const;
+  // This process's shards of a batch that holds its rank's share (DatasetPrefetcher's shards).
+  std::vector<Batch> local_shards(const Batch& rank_share) const;
+  void check_shards(const StageConfig& stage) const;
   // Rolls the windows' simulations (TBB) and returns what L_sim needs of them.
   struct SimulatedWindows {
     std::vector<int64_t> rows;   // batch rows compared with a simulated state
@@ -164,6 +179,8 @@ class Trainer {
   std::map<int, Vertices> gt_keypoints_;
   physics::SimulatorFactory simulator_;
   std::vector<int> window_starts_;  // train frames that start F consecutive train frames
+  nn::ProcessGroup& group_ = nn::ProcessGroup::world();
+  int shards_ = 1;  // shards per global batch, over all ranks (nn/data_parallel.h)
 };
 
 CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool training, PartTimes* times) {
@@ -202,8 +219,9 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
 }
 
 // The physics stage's batch: `windows` runs of F consecutive train frames, each seen from
-// one view, drawn from (seed, step) alone so a resumed run draws the same.
-Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, bool parallel) const {
+// one view, drawn from (seed, step) alone so a resumed run draws the same. Data
+// parallelism cuts it by windows: this process loads its shards' windows only.
+std::vector<Batch> Trainer::physics_shards(int64_t step, const StageConfig& stage, bool parallel) const {
   const int F = cfg_.physics.window_frames;
   const int windows = std::max(1, stage.batch_size / F);
   PortableRandom rng(mix_seed(cfg_.seed, 0x5157, uint64_t(step)));
@@ -214,13 +232,53 @@ Batch Trainer::physics_batch(int64_t step, const StageConfig& stage, bool parall
     const std::string& view = info_.views[std::min<size_t>(info_.views.size() - 1, size_t(rng.uniform() * info_.views.size()))];
     for (int j = 0; j < F; ++j) keys.emplace_back(start + j, view);
   }
-  std::vector<Sample> samples(keys.size());
-  auto load = [&](size_t i) { samples[i] = train_->load(keys[i].first, keys[i].second); };
+  const int local = shards_ / group_.size(), first_shard = group_.rank() * local;
+  const auto [first, last] = std::pair(nn::shard_range(windows, first_shard, shards_).first * F,
+                                       nn::shard_range(windows, first_shard + local - 1, shards_).second * F);
+  std::vector<Sample> samples(size_t(last - first));
+  auto load = [&](size_t i) { samples[i] = train_->load(keys[first + i].first, keys[first + i].second); };
   if (parallel)
-    tbb::parallel_for(size_t(0), keys.size(), load);
+    tbb::parallel_for(size_t(0), samples.size(), load);
   else
-    for (size_t i = 0; i < keys.size(); ++i) load(i);
-  return make_batch(samples);
+    for (size_t i = 0; i < samples.size(); ++i) load(i);
+  std::vector<Batch> out;
+  for (int j = 0; j < local; ++j) {
+    const auto [w0, w1] = nn::shard_range(windows, first_shard + j, shards_);
+    out.push_back(make_batch(std::vector<Sample>(samples.begin() + (w0 * F - first), samples.begin() + (w1 * F - first))));
+    out.back().whole_size = windows * F;
+  }
+  return out;
+}
+
+std::vector<Batch> Trainer::local_shards(const Batch& share) const {
+  const int local = shards_ / group_.size(), first_shard = group_.rank() * local;
+  if (local == 1) return {share};
+  const int64_t n = share.whole_size, offset = nn::shard_range(n, group_.rank(), group_.size()).first;
+  std::vector<Batch> out;
+  for (int j = 0; j < local; ++j) {
+    const auto [first, last] = nn::shard_range(n, first_shard + j, shards_);
+    out.push_back(batch_rows(share, int(first - offset), int(last - offset)));
+  }
+  return out;
+}
+
+// Every shard of every batch holds at least one sample (physics: one window).
+void Trainer::check_shards(const StageConfig& s) const {
+  if (shards_ == 1) return;
+  const char* name = stage_name(s.kind);
+  if (s.kind == StageKind::physics) {
+    const int windows = std::max(1, s.batch_size / cfg_.physics.window_frames);
+    WEFT_CHECK(windows >= shards_, cfg_.file, ": stages.", name, ".batch_size: ", s.batch_size, " gives ", windows,
+               " simulation windows of ", cfg_.physics.window_frames, " frames, fewer than the ", shards_,
+               " shards of data parallelism (shards, or the ranks of mpirun -np): raise it to at least ",
+               shards_ * cfg_.physics.window_frames);
+  } else {
+    WEFT_CHECK(s.batch_size >= shards_, cfg_.file, ": stages.", name, ".batch_size: ", s.batch_size,
+               " samples cannot be cut into the ", shards_,
+               " shards of data parallelism (shards, or the ranks of mpirun -np)");
+    WEFT_CHECK(train_->size() >= shards_, options_.data, ": the train split's ", train_->size(),
+               " samples cannot be cut into ", shards_, " shards");
+  }
 }
 
 Trainer::SimulatedWindows Trainer::simulate(const CapturePrediction& p, int windows, StepResult& r) {
@@ -275,47 +333,92 @@ Tensor Trainer::simulation_term(const CapturePrediction& p, const SimulatedWindo
 }
 
 Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt,
-                                        const Batch& batch, PartTimes& times) {
+                                        nn::DataParallel& dp, const std::vector<Batch>& shards, PartTimes& times) {
   StepResult r;
-  const CapturePrediction p = forward(batch, stage.kind, true, &times);
-  auto t = Clock::now();
-  // The simulation runs on TBB threads while this thread computes the image losses.
-  const bool simulating = stage.kind == StageKind::physics && stage.weights.simulation > 0;
-  std::future<SimulatedWindows> simulated;
-  if (simulating)
-    simulated = std::async(std::launch::async, [&] { return simulate(p, batch.size() / cfg_.physics.window_frames, r); });
-  LandmarkStatistics stats;
-  std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
-  times.lap("losses", t);
-  if (simulating) {
-    const Tensor sim = simulation_term(p, simulated.get());
-    if (sim.defined()) terms["simulation"] = sim;
-    times.lap("simulation (beyond the losses)", t);
-  }
-  Tensor total;
   const std::map<std::string, double> weights = {{"landmarks", stage.weights.landmarks},
                                                  {"silhouette", stage.weights.silhouette},
                                                  {"arap", stage.weights.arap},
                                                  {"attachment", stage.weights.attachment},
                                                  {"simulation", stage.weights.simulation}};
-  for (const auto& [name, t] : terms) {
-    const double v = t.item();
-    if (!std::isfinite(v))
-      fail(options_.run, ": step ", step, " (stage ", stage_name(stage.kind), "): the ", name, " loss is ", v,
-           "; stopping before it reaches the networks (the last checkpoint is intact)");
-    r.terms[name] = v;
-    const double w = weights.at(name);
-    if (w <= 0) continue;
-    const Tensor wt = ops::scale(t, w);
-    total = total.defined() ? ops::add(total, wt) : wt;
+  // Per figure: Σ_j w_j · value_j over this process's shards (w_j: the shard's share of
+  // the global batch, so the gradient is that of this weighted sum), and in how many
+  // shards it was present. One shard on one process: the batch's own values.
+  std::map<std::string, std::pair<double, int>> sums;
+  auto add = [&](const std::string& name, double share, double value) {
+    auto& [sum, count] = sums[name];
+    sum += share * value;
+    ++count;
+  };
+  dp.begin_step();
+  for (const Batch& batch : shards) {
+    const double share = double(batch.size()) / batch.whole_size;
+    dp.begin_shard();
+    const CapturePrediction p = forward(batch, stage.kind, true, &times);
+    auto t = Clock::now();
+    // The simulation runs on TBB threads while this thread computes the image losses.
+    const bool simulating = stage.kind == StageKind::physics && stage.weights.simulation > 0;
+    std::future<SimulatedWindows> simulated;
+    if (simulating)
+      simulated = std::async(std::launch::async, [&] { return simulate(p, batch.size() / cfg_.physics.window_frames, r); });
+    LandmarkStatistics stats;
+    std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
+    times.lap("losses", t);
+    if (simulating) {
+      const Tensor sim = simulation_term(p, simulated.get());
+      if (sim.defined()) terms["simulation"] = sim;
+      times.lap("simulation (beyond the losses)", t);
+    }
+    Tensor total;
+    for (const auto& [name, t] : terms) {
+      add(name, share, t.item());
+      const double w = weights.at(name);
+      if (w <= 0) continue;
+      const Tensor wt = ops::scale(t, w);
+      total = total.defined() ? ops::add(total, wt) : wt;
+    }
+    add("keypoint_px", share, stats.mean_error_px);
+    WEFT_CHECK(total.defined(), cfg_.file, ": stages.", stage_name(stage.kind), ": every loss weight is 0");
+    add("total", share, total.item());
+    opt.zero_grad();
+    (dp.active() ? ops::scale(total, share) : total).backward();
+    times.lap("backward", t);
+    dp.end_shard();
   }
-  r.terms["keypoint_px"] = stats.mean_error_px;
+  // The step's figures over all ranks, in one small all-reduce: what rank 0 logs, and
+  // what every rank checks before its optimiser steps.
+  auto t = Clock::now();
+  static const char* kFigures[] = {"arap", "attachment", "landmarks", "silhouette", "simulation", "keypoint_px", "total"};
+  static const physics::StepStatus kFailures[] = {physics::StepStatus::max_iterations,
+                                                  physics::StepStatus::line_search_failed,
+                                                  physics::StepStatus::non_finite};
+  std::vector<double> all;
+  for (const char* name : kFigures) {
+    const auto it = sums.find(name);
+    all.push_back(it == sums.end() ? 0.0 : it->second.first);
+    all.push_back(it == sums.end() ? 0.0 : it->second.second);
+  }
+  all.push_back(r.windows);
+  all.push_back(r.failures);
+  for (physics::StepStatus f : kFailures) all.push_back(r.failure_statuses[physics::to_string(f)]);
+  group_.all_reduce_sum(std::span<double>(all), "loss terms");
+  for (size_t i = 0; i < std::size(kFigures); ++i)
+    if (all[2 * i + 1] > 0) r.terms[kFigures[i]] = all[2 * i];
+  size_t k = 2 * std::size(kFigures);
+  r.windows = int(all[k++]);
+  r.failures = int(all[k++]);
+  r.failure_statuses.clear();
+  for (physics::StepStatus f : kFailures)
+    if (const int n = int(all[k++]); n > 0) r.failure_statuses[physics::to_string(f)] = n;
+  for (const auto& [name, w] : weights)
+    if (const auto it = r.terms.find(name); it != r.terms.end() && !std::isfinite(it->second))
+      fail(options_.run, ": step ", step, " (stage ", stage_name(stage.kind), "): the ", name, " loss is ", it->second,
+           "; stopping before it reaches the networks (the last checkpoint is intact)");
   if (stage.kind == StageKind::physics) r.terms["sim_failures"] = r.failures;
-  WEFT_CHECK(total.defined(), cfg_.file, ": stages.", stage_name(stage.kind), ": every loss weight is 0");
-  r.terms["total"] = total.item();
-  opt.zero_grad();
-  total.backward();
-  times.lap("backward", t);
+  if (group_.distributed()) times.lap("waiting for the other ranks", t);
+  if (dp.active()) {
+    dp.finish_step();
+    times.lap("all-reduce of the gradients", t);
+  }
   opt.step();
   times.lap("optimiser", t);
   ++times.steps;
@@ -325,10 +428,15 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
 void Trainer::save(int64_t step, const StageConfig& stage, const nn::Optimizer& opt) {
   WEFT_CHECK(all_finite(nets_), options_.run, ": step ", step,
              ": a network parameter is not finite; not writing a checkpoint (the last one is intact)");
+  // Rank 0's checkpoint stands for every rank: check that it does.
+  nn::check_identical_on_all_ranks(group_, nn::state_checksum(nets_), options_.run + ": checkpoint of step " +
+                                                                          std::to_string(step));
+  if (!group_.is_root()) return;
   const fs::path dir = fs::path(options_.run) / "checkpoints";
   fs::create_directories(dir);
   nn::save_checkpoint((dir / checkpoint_file(step)).string(), nets_, &opt, step, nullptr,
-                      {{"weft.stage", stage_name(stage.kind)}, {"weft.backbone", cfg_.network.backbone}});
+                      {{"weft.stage", stage_name(stage.kind)}, {"weft.backbone", cfg_.network.backbone},
+                       {"weft.shards", std::to_string(shards_)}});
   auto all = list_checkpoints(dir);
   while (int(all.size()) > cfg_.keep_checkpoints) {
     fs::remove(all.front().second);
@@ -387,7 +495,8 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   return rep;
 }
 
-// Keeps the validations of steps ≤ `step` (a resumed run validates the later ones again).
+// Keeps the rows of steps ≤ `step` of a CSV whose first column is the step (validation.csv,
+// parameters.csv): a resumed run writes the later ones again.
 void cut_validation(const fs::path& path, int64_t step) {
   if (!fs::exists(path)) return;
   std::istringstream in(read_file_bytes(path.string()));
@@ -428,6 +537,25 @@ void log_times(const StageConfig& s, const PartTimes& times, const fs::path& run
   write_text_atomically((run / fmt::format("timing_{}.json", stage_name(s.kind))).string(), json);
 }
 
+// --parameter-checksums: one row per step of RUN/parameters.csv with the checksum of both
+// networks' parameters and batch-norm statistics (nn::state_checksum, equal exactly when
+// bit-identical) and the sum of the parameters; every rank checks that it holds the same.
+void append_parameter_checksum(const fs::path& path, int64_t step, const CaptureNetworks& nets,
+                               nn::ProcessGroup& group) {
+  const uint64_t checksum = nn::state_checksum(nets);
+  nn::check_identical_on_all_ranks(group, checksum, "step " + std::to_string(step));
+  if (!group.is_root()) return;
+  double sum = 0;
+  for (const nn::NamedTensor& p : nets.named_parameters()) {
+    const float* d = p.tensor.data<float>();
+    for (int64_t i = 0; i < p.tensor.numel(); ++i) sum += d[i];
+  }
+  const bool fresh = !fs::exists(path);
+  std::ofstream out(path, std::ios::app);
+  if (fresh) out << "step,checksum,parameter_sum\n";
+  out << step << ',' << fmt::format("{:016x}", checksum) << ',' << fmt::format("{:.17g}", sum) << '\n';
+}
+
 void log_validation(const ValidationReport& r) {
   spdlog::info("validation at step {}: {} samples, keypoints {:.2f} px, joints {:.1f} mm, silhouette IoU {:.4f}, "
                "penetration mean {:.2f} mm max {:.2f} mm ({:.2f} % of cloth vertices)",
@@ -443,8 +571,14 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
   std::unique_ptr<nn::Optimizer> opt;
   const StageConfig* stage = nullptr;
   const auto existing = list_checkpoints(ckdir);
-  if (options_.resume && !existing.empty()) {
-    const fs::path& last = existing.back().second;
+  // Every rank resumes from rank 0's choice (a shared file system may show a rank a
+  // stale listing).
+  int64_t chosen = options_.resume && !existing.empty() ? existing.back().first : -1;
+  group_.broadcast(std::span<int64_t>(&chosen, 1), 0, "the checkpoint to resume from");
+  if (chosen >= 0) {
+    const fs::path last = ckdir / checkpoint_file(chosen);
+    WEFT_CHECK(fs::exists(last), last.string(), ": missing on ", group_.describe(),
+               "; every rank reads rank 0's checkpoints, so RUN must be on a file system all ranks share");
     const nn::SafetensorsFile file = nn::load_safetensors(last.string());
     const auto it = file.metadata.find("weft.step");
     WEFT_CHECK(it != file.metadata.end(), last.string(), ": not a training checkpoint (no weft.step)");
@@ -453,8 +587,13 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
                cfg_.total_steps(), " steps");
     stage = &cfg_.stage_of(std::max<int64_t>(step, 1));
     opt = make_optimizer(*stage);
-    done = nn::load_checkpoint(last.string(), nets_, opt.get(), nullptr).step;
+    const nn::TrainingCheckpoint loaded = nn::load_checkpoint(last.string(), nets_, opt.get(), nullptr);
+    done = loaded.step;
     spdlog::info("resuming {} at step {} (stage {})", last.string(), done + 1, stage_name(stage->kind));
+    if (const auto s = loaded.metadata.find("weft.shards"); s != loaded.metadata.end() && std::stoi(s->second) != shards_)
+      spdlog::warn("{}: written with {} shards per batch, resumed with {}: the continuation is not the computation "
+                   "the run started (set `shards` in the config to fix it across rank counts)",
+                   last.string(), s->second, shards_);
   } else if (options_.resume) {
     spdlog::info("{}: no checkpoint yet: starting from step 1", ckdir.string());
   }
@@ -462,14 +601,26 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     load_capture_networks(options_.init_weights, nets_);
     spdlog::info("starting from the weights of {}", options_.init_weights);
   }
-  LossLog log((run / "losses.csv").string(), options_.resume ? done : -1);
-  cut_validation(run / "validation.csv", options_.resume ? done : 0);
+  // Rank 0 writes every file of the run.
+  std::unique_ptr<LossLog> log;
+  if (group_.is_root()) {
+    log = std::make_unique<LossLog>((run / "losses.csv").string(), options_.resume ? done : -1);
+    cut_validation(run / "validation.csv", options_.resume ? done : 0);
+    if (options_.parameter_checksums) cut_validation(run / "parameters.csv", options_.resume ? done : 0);
+  }
+  if (shards_ > 1)
+    spdlog::info("data parallel: {} ranks, {} shards per global batch ({} per rank), each with its own batch-norm "
+                 "statistics; gradients and statistics averaged over the shards",
+                 group_.size(), shards_, shards_ / group_.size());
+  for (const StageConfig& s : cfg_.stages)  // before the first step, not at the stage
+    if (s.steps > 0) check_shards(s);
   const int64_t total = cfg_.total_steps();
   const int64_t last_step = options_.stop_after >= 0 ? std::min(total, options_.stop_after) : total;
   summary.first_step = done + 1;
   const auto t0 = Clock::now();
   std::unique_ptr<DatasetPrefetcher> prefetcher;
-  std::future<Batch> next_physics;
+  std::unique_ptr<nn::DataParallel> dp;
+  std::future<std::vector<Batch>> next_physics;
   int64_t next_physics_step = -1;
   std::map<StageKind, PartTimes> stage_times;
   const StageConfig* prefetcher_stage = nullptr;
@@ -484,6 +635,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
         opt = make_optimizer(s);
       }
       setup_stage = &s;
+      dp = make_data_parallel(s, *opt);
       spdlog::info("stage {}: steps {}–{}, batch {}, lr {}", stage_name(s.kind), stage_start + 1,
                    stage_start + s.steps, s.batch_size, s.lr);
       if (s.kind == StageKind::physics) {
@@ -507,14 +659,14 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
 
     PartTimes& times = stage_times[s.kind];
     auto t_data = Clock::now();
-    Batch batch;
+    std::vector<Batch> shards;
     if (s.kind == StageKind::physics) {
       // Loaded one step ahead on another thread (a function of the step alone).
-      batch = next_physics.valid() && next_physics_step == step ? next_physics.get() : physics_batch(step, s, true);
+      shards = next_physics.valid() && next_physics_step == step ? next_physics.get() : physics_shards(step, s, true);
       if (step + 1 <= std::min(last_step, stage_start + s.steps)) {
         next_physics_step = step + 1;
         // One loading thread: the networks' kernels keep the cores.
-        next_physics = std::async(std::launch::async, [this, step, &s] { return physics_batch(step + 1, s, false); });
+        next_physics = std::async(std::launch::async, [this, step, &s] { return physics_shards(step + 1, s, false); });
       }
     } else {
       if (prefetcher_stage != &s) {
@@ -525,13 +677,15 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
         po.loader_threads = cfg_.loader_threads;
         po.drop_last = train_->size() >= s.batch_size;
         po.first_batch = step - stage_start - 1;
+        po.shard = group_.rank();
+        po.shards = group_.size();
         prefetcher = std::make_unique<DatasetPrefetcher>(*train_, po);
         prefetcher_stage = &s;
       }
-      batch = prefetcher->next();
+      shards = local_shards(prefetcher->next());
     }
     times.lap("data (waiting)", t_data);
-    const StepResult r = train_step(step, s, *opt, batch, times);
+    const StepResult r = train_step(step, s, *opt, *dp, shards, times);
     auto t_book = Clock::now();
     summary.simulation_windows += r.windows;
     summary.simulation_failures += r.failures;
@@ -541,8 +695,9 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     row.stage = stage_name(s.kind);
     row.terms = r.terms;
     row.terms["lr"] = opt->lr();
-    log.append(row);
-    if (progress) progress({step, total, row.stage, r.terms});
+    if (log) log->append(row);
+    if (options_.parameter_checksums) append_parameter_checksum(run / "parameters.csv", step, nets_, group_);
+    if (progress && group_.is_root()) progress({step, total, row.stage, r.terms});
     if (step % cfg_.log_every == 0 || step == last_step) {
       std::string msg;
       for (const auto& [k, v] : r.terms) msg += fmt::format(" {} {:.4g}", k, v);
@@ -552,7 +707,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     const bool stage_end = step == stage_start + s.steps;
     if (step % cfg_.checkpoint_every == 0 || stage_end || step == last_step) save(step, s, *opt);
     if ((cfg_.validate_every > 0 && step % cfg_.validate_every == 0) || step == total) {
-      if (val_) {
+      if (val_ && group_.is_root()) {  // the other ranks go on to the next step's data and wait there
         ValidationReport v = validate(*val_, cfg_.validation_samples);
         v.step = step;
         append_validation(run / "validation.csv", v);
@@ -560,13 +715,14 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
         summary.last_validation = v;
       }
     }
-    if (step % 25 == 0 || stage_end || step == last_step) plot_losses(log.rows(), (run / "losses.png").string());
+    if (log && (step % 25 == 0 || stage_end || step == last_step))
+      plot_losses(log->rows(), (run / "losses.png").string());
     times.lap("log, checkpoint, plot, validation", t_book);
-    if (stage_end || step == last_step) log_times(s, times, run);
+    if ((stage_end || step == last_step) && group_.is_root()) log_times(s, times, run);
   }
   summary.last_step = last_step;
   summary.seconds = seconds_since(t0);
-  if (last_step == total) nn::save_weights((run / "model.safetensors").string(), nets_);
+  if (last_step == total && group_.is_root()) nn::save_weights((run / "model.safetensors").string(), nets_);
   return summary;
 }
 
@@ -583,10 +739,10 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const T
   if (options.resume && fs::exists(saved)) {
     WEFT_CHECK(read_file_bytes(saved.string()) == text, options.config, ": differs from ", saved.string(),
                ", the config the run was started with; resume with that one");
-  } else {
+  } else if (nn::ProcessGroup::world().is_root()) {
     write_text_atomically(saved.string(), text);
   }
-  write_model_folder(options.run, options.config, options.data);
+  if (nn::ProcessGroup::world().is_root()) write_model_folder(options.run, options.config, options.data);
   Trainer trainer(options, cfg);
   return trainer.run(progress);
 }

@@ -11,6 +11,11 @@
 // checkpoint exactly as a run that was never stopped: batches and windows are functions
 // of (seed, step), the optimiser's state and the batch-norm statistics are in the
 // checkpoint, and losses.csv is cut back to the checkpoint's step.
+//
+// Under mpirun the trainer is data-parallel (nn/data_parallel.h; docs/TRAINING.md, "On a
+// cluster"): every rank computes its shards of each global batch, the gradients and the
+// batch-norm statistics are averaged over the shards with MPI all-reduces, and rank 0
+// alone writes the run folder.
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -30,6 +35,9 @@ struct TrainOptions {
   // instead of a fresh initialisation: domain adaptation refines a trained model. A
   // resumed run ignores it (its checkpoint holds the weights).
   std::string init_weights;
+  // Write RUN/parameters.csv: per step a checksum of every parameter and batch-norm
+  // statistic (data-parallel runs check that all ranks hold the same).
+  bool parameter_checksums = false;
 };
 
 struct TrainProgress {

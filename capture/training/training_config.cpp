@@ -74,7 +74,7 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
                           "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
-                          "physics"});
+                          "shards", "physics"});
   TrainingConfig c;
   c.file = name;
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
@@ -85,7 +85,8 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
              {"validate_every", &c.validate_every, 0, 1e8},
              {"validation_samples", &c.validation_samples, 1, 1e6},
              {"checkpoint_every", &c.checkpoint_every, 1, 1e8},
-             {"keep_checkpoints", &c.keep_checkpoints, 1, 1000}},
+             {"keep_checkpoints", &c.keep_checkpoints, 1, 1000},
+             {"shards", &c.shards, 0, 4096}},
             {"seed", "network", "stages", "physics"});
   if (const YAML::Node n = root["network"]) {
     NetworkConfig& m = c.network;

@@ -64,6 +64,11 @@ struct TrainingConfig {
   int validation_samples = 32; // val samples (frame, view) per validation, spread over the split
   int checkpoint_every = 50;   // steps between checkpoints (and one at the end)
   int keep_checkpoints = 3;    // the last K are kept
+  // Data parallelism (nn/data_parallel.h, `mpirun`): every global batch is cut into this
+  // many shards, each with its own forward, backward and batch-norm statistics, spread
+  // over the ranks (a multiple of their number); 0: one shard per rank. A fixed value
+  // makes the run the same computation on any number of ranks that divides it.
+  int shards = 0;
   PhysicsConfig physics;
 
   int total_steps() const;

@@ -594,6 +594,42 @@ TEST(DatasetPrefetcher, BatchesHoldTheSamplesTheyName) {
   }
 }
 
+// Data parallelism: the shards of batch k, in shard order, are batch k of the unsharded
+// stream, cut at ⌊j·n/S⌋; batch_rows cuts a loaded batch the same way.
+TEST(DatasetPrefetcher, ShardsOfABatchAreItsConsecutiveSlices) {
+  ScratchDir scratch("dataset");
+  const FakeDataset d = write_dataset(scratch);
+  const SyntheticDataset train(d.dir, {"train", 16});
+  PrefetchOptions o;
+  o.batch_size = 5;
+  o.drop_last = true;
+  DatasetPrefetcher whole(train, o);
+  o.shards = 2;
+  o.shard = 0;
+  DatasetPrefetcher first(train, o);
+  o.shard = 1;
+  DatasetPrefetcher second(train, o);
+  for (int k = 0; k < 3; ++k) {
+    const Batch b = whole.next(), b0 = first.next(), b1 = second.next();
+    ASSERT_EQ(b0.size(), 2);  // ⌊5/2⌋
+    ASSERT_EQ(b1.size(), 3);
+    EXPECT_EQ(b0.whole_size, 5);
+    EXPECT_EQ(b1.whole_size, 5);
+    std::vector<int> joined = b0.indices;
+    joined.insert(joined.end(), b1.indices.begin(), b1.indices.end());
+    EXPECT_EQ(joined, b.indices) << "batch " << k;
+    const Batch tail = batch_rows(b, 2, 5);
+    EXPECT_EQ(tail.indices, b1.indices);
+    EXPECT_EQ(tail.images.to_vector(), b1.images.to_vector());
+    EXPECT_EQ(tail.dt.to_vector(), b1.dt.to_vector());
+  }
+  o.shard = 2;
+  EXPECT_THROW(DatasetPrefetcher(train, o), weft::Error);
+  o.shard = 0;
+  o.shards = 6;
+  EXPECT_THROW(DatasetPrefetcher(train, o), weft::Error) << "6 shards of a batch of 5";
+}
+
 TEST(DatasetPrefetcher, LoaderErrorsSurfaceInNextWithThePath) {
   ScratchDir scratch("dataset");
   const FakeDataset d = write_dataset(scratch);
