@@ -169,7 +169,7 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   }
   if (!failed.empty()) {
     e.notes.push_back(fmt::format("frames {} failed in the dataset's simulation: their ground-truth cloth is not "
-                                  "in equilibrium",
+                                  "in equilibrium, so their cloth vertex error is not measured",
                                   fmt::join(failed, ", ")));
     spdlog::warn("{}", e.notes.back());
   }
@@ -224,11 +224,15 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     fe.mpjpe_mm = mean_joint_error_mm(body25, gt_pose.body25, mpu);
     pivot_err.add(fe.pivot_error_mm), body_err.add(fe.body_error_mean_mm), mpjpe.add(fe.mpjpe_mm);
     if (e.has_cloth) {
-      const std::vector<double> cd = vertex_distances_mm(now.cloth, now.gt_cloth, mpu);
-      fe.cloth_error_mean_mm = std::accumulate(cd.begin(), cd.end(), 0.0) / cd.size();
-      fe.cloth_error_p95_mm = quantile(cd, 0.95);
-      cloth_distances.insert(cloth_distances.end(), cd.begin(), cd.end());
-      cloth_err.add(fe.cloth_error_mean_mm);
+      // A frame whose simulation failed has no trustworthy cloth to compare with: its cloth
+      // error is not measured (the rest of the frame is).
+      if (!std::binary_search(failed.begin(), failed.end(), f)) {
+        const std::vector<double> cd = vertex_distances_mm(now.cloth, now.gt_cloth, mpu);
+        fe.cloth_error_mean_mm = std::accumulate(cd.begin(), cd.end(), 0.0) / cd.size();
+        fe.cloth_error_p95_mm = quantile(cd, 0.95);
+        cloth_distances.insert(cloth_distances.end(), cd.begin(), cd.end());
+        cloth_err.add(fe.cloth_error_mean_mm);
+      }
 
       // Penetration, of the prediction and of the ground truth.
       const Penetration p = cloth_penetration(ch, now.body, now.cloth);
@@ -325,7 +329,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   // Overlays of the worst and the median frame: by cloth error, else by the input view's IoU.
   std::vector<int> ranked;
   for (int k = 0; k < total; ++k)
-    if (e.has_cloth || std::isfinite(e.frames[k].sv_iou)) ranked.push_back(k);
+    if (e.has_cloth ? std::isfinite(e.frames[k].cloth_error_mean_mm) : std::isfinite(e.frames[k].sv_iou))
+      ranked.push_back(k);
   const auto score = [&](int k) { return e.has_cloth ? e.frames[k].cloth_error_mean_mm : -e.frames[k].sv_iou; };
   std::stable_sort(ranked.begin(), ranked.end(), [&](int a, int b) { return score(a) > score(b); });
   std::vector<std::pair<std::string, int>> picks;
