@@ -14,6 +14,7 @@
 #include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
 #include "capture/training/model_folder.h"
+#include "capture/studio/synthetic_studio.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -21,12 +22,6 @@ namespace weft::capture {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string four_digits(int id) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%04d", id);
-  return buf;
-}
 
 // The sequence as a one-view dataset (docs/DATASET.md), frames renumbered 0 … N − 1 in
 // input order; returns the number of frames. Written into a sibling folder and renamed,
@@ -43,7 +38,7 @@ int write_sequence_dataset(const AdaptOptions& o, const ModelFolder& model, cons
   int n = 0, width = 0, height = 0, detected = 0;
   SequenceFrame f;
   while ((o.max_frames < 0 || n < o.max_frames) && input.next(f)) {
-    const std::string id = four_digits(n);
+    const std::string id = dataset_frame_name(n);
     write_png_atomically((staging / "images" / view / (id + ".png")).string(), f.frame.bgr);
     write_png_atomically((staging / "masks" / view / (id + ".png")).string(), f.mask);
     OpenPoseFrame people;

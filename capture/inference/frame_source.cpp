@@ -1,4 +1,5 @@
 #include "capture/inference/frame_source.h"
+#include "capture/studio/synthetic_studio.h"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -21,12 +22,6 @@ bool all_digits(const std::string& s) {
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
   return s;
-}
-
-std::string four_digits(int id) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%04d", id);
-  return buf;
 }
 
 }  // namespace
@@ -63,7 +58,7 @@ bool FrameSource::next(InputFrame& frame) {
     if (!capture_.read(bgr) || bgr.empty()) return false;
     if (bgr.type() != CV_8UC3) fail(path_, ": frame ", next_, " is not an 8-bit colour image");
     frame.id = next_++;
-    frame.name = four_digits(frame.id);
+    frame.name = dataset_frame_name(frame.id);
     frame.bgr = bgr;
     size_ = std::max(size_, next_);
     return true;

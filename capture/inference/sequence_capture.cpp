@@ -27,6 +27,7 @@
 #include "capture/studio/garment_collision_resolution.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/model_folder.h"
+#include "capture/studio/synthetic_studio.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
 
@@ -48,12 +49,6 @@ struct PartClock {
     t = now;
   }
 };
-
-std::string four_digits(int id) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%04d", id);
-  return buf;
-}
 
 // What pass 1 keeps of a frame for pass 2.
 struct FrameRecord {
@@ -231,7 +226,6 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   summary.frames = n;
   summary.metres_per_unit = character.metres_per_unit;
   const RootPlacement placement(character);
-  const PoseParametrisation& param = capture_model.parametrisation();
   Motion motion;
   motion.dofs.resize(n, character.skeleton.num_dofs());
   std::vector<Transforms> globals;
@@ -328,7 +322,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
     // The batch's files, frames in parallel (the networks are done: both cores are free).
     tbb::parallel_for(0, B, [&](int b) {
       FrameOutput& w = outputs[size_t(b)];
-      const std::string id = four_digits(w.id);
+      const std::string id = dataset_frame_name(w.id);
       TriangleMesh body_mesh = character.body.mesh, cloth_mesh;
       body_mesh.colors.resize(0, 3);
       body_mesh.V = w.body;
@@ -360,7 +354,6 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
     }
     clock.lap("write");
   }
-  (void)param;
   write_motion((out / "pose.motion").string(), motion);
   write_bvh((out / "pose.bvh").string(), skeleton_motion_bvh(character.skeleton, globals, 1.0 / fps));
   const std::string video_path = video.finish();

@@ -9,17 +9,12 @@
 
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/green_screen.h"
+#include "capture/studio/synthetic_studio.h"
 #include "graph/error.h"
 
 namespace weft::capture {
 
 namespace {
-
-std::string four_digits(int id) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%04d", id);
-  return buf;
-}
 
 cv::Mat read_mask(const std::string& path, const cv::Size& size) {
   const cv::Mat m = cv::imread(path, cv::IMREAD_GRAYSCALE);
@@ -58,7 +53,7 @@ CaptureCameras::CaptureCameras(const std::string& file, const std::string& wante
 }
 
 const Camera& CaptureCameras::at(int id) const {
-  const std::string n = per_frame_ ? name_ + "_" + four_digits(id) : name_;
+  const std::string n = per_frame_ ? name_ + "_" + dataset_frame_name(id) : name_;
   const auto it = by_name_.find(n);
   WEFT_CHECK(it != by_name_.end(), file_, ": no camera '", n, "' for frame ", id);
   return it->second;
