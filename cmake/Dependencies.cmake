@@ -8,6 +8,8 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(assimp REQUIRED)
+# oneDNN (Debian's libdnnl-dev): conv2d's default float32 kernels (ops/conv_backend.h).
+find_package(dnnl 2 CONFIG REQUIRED)
 
 # Debian's SuiteSparse ships no CMake config: find CHOLMOD by hand.
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)

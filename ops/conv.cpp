@@ -23,6 +23,9 @@
 #include <vector>
 
 #include "graph/threads.h"
+#include "ops/conv_backend.h"
+#include "ops/conv_geometry.h"
+#include "ops/conv_onednn.h"
 #include "ops/depth_blocked_gemm.h"
 #include "ops/ops.h"
 
@@ -36,35 +39,33 @@ using CMapMat = Eigen::Map<const RowMat<T>>;
 template <class T>
 using CMapVec = Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>>;
 
-struct ConvGeometry {
-  int64_t N, C, H, W;     // input
-  int64_t O, kh, kw;      // weight
-  int64_t sh, sw, ph, pw, dh, dw;
-  int64_t Ho, Wo;         // output
-  int64_t K() const { return C * kh * kw; }
-  int64_t P() const { return Ho * Wo; }
-  // The input image [C, H·W] is already the column matrix.
-  bool pointwise() const {
-    return kh == 1 && kw == 1 && sh == 1 && sw == 1 && ph == 0 && pw == 0;
-  }
-};
-
 std::string conv_desc(const Tensor& x, const Tensor& w) {
   return "input " + describe(x) + ", weight " + describe(w);
 }
+
+}  // namespace
 
 ConvGeometry conv_geometry(const std::vector<Tensor>& in, const Attrs& a) {
   if (in.size() != 2 && in.size() != 3)
     fail("conv2d: expected 2 inputs (x, weight) or 3 (x, weight, bias), got ", in.size());
   const Tensor& x = in[0];
   const Tensor& w = in[1];
-  if (x.dim() != 4 || w.dim() != 4)
-    fail("conv2d: expected a 4-D input [N,C,H,W] and a 4-D weight [O,C,kh,kw]; got ",
-         conv_desc(x, w));
+  const int64_t block = a.get_int("channel_block", 1);
+  if (block != 1 && block != 8 && block != 16)
+    fail("conv2d: channel_block must be 1 (NCHW), 8 or 16; got ", block, "; ", conv_desc(x, w));
+  if (x.dim() != (block > 1 ? 5 : 4) || w.dim() != 4 || (block > 1 && x.size(4) != block))
+    fail("conv2d: expected an input ",
+         block > 1 ? "[N,C/" + std::to_string(block) + ",H,W," + std::to_string(block) + "]"
+                   : std::string("[N,C,H,W]"),
+         " and a 4-D weight [O,C,kh,kw]; got ", conv_desc(x, w));
   if (x.dtype() != w.dtype()) fail("conv2d: dtype mismatch: ", conv_desc(x, w));
   if (x.dtype() == DType::I64) fail("conv2d: expected float32 or float64, got ", conv_desc(x, w));
   ConvGeometry g{};
-  g.N = x.size(0), g.C = x.size(1), g.H = x.size(2), g.W = x.size(3);
+  g.block = block;
+  g.N = x.size(0), g.C = x.size(1) * block, g.H = x.size(2), g.W = x.size(3);
+  if (block > 1 && w.size(0) % block != 0)
+    fail("conv2d: a blocked output needs output channels divisible by ", block, "; ",
+         conv_desc(x, w));
   g.O = w.size(0), g.kh = w.size(2), g.kw = w.size(3);
   if (w.size(1) != g.C)
     fail("conv2d: weight has ", w.size(1), " input channels but the input has ", g.C, "; ",
@@ -95,6 +96,8 @@ ConvGeometry conv_geometry(const std::vector<Tensor>& in, const Attrs& a) {
   g.Wo = (g.W + 2 * g.pw - ext_w) / g.sw + 1;
   return g;
 }
+
+namespace {
 
 // Output columns ow whose input column ow·sw + off lies in [0, W): [lo, hi).
 inline void valid_range(int64_t off, int64_t sw, int64_t W, int64_t Wo, int64_t& lo,
@@ -374,23 +377,87 @@ std::vector<Tensor> conv_backward(const BackwardContext& c, const ConvGeometry& 
   return result();
 }
 
+// Copies between [N, C/L, H, W, L] (blocked) and [N, C, H, W], for the Eigen kernels,
+// which are NCHW-native.
+template <class T>
+Tensor unblock(const Tensor& t) {
+  const int64_t N = t.size(0), Cb = t.size(1), S = t.size(2) * t.size(3), L = t.size(4);
+  Tensor out = Tensor::empty({N, Cb * L, t.size(2), t.size(3)}, t.dtype());
+  const T* src = t.data<T>();
+  T* dst = out.data<T>();
+  for (int64_t nc = 0; nc < N * Cb; ++nc)
+    for (int64_t p = 0; p < S; ++p)
+      for (int64_t l = 0; l < L; ++l) dst[(nc * L + l) * S + p] = src[(nc * S + p) * L + l];
+  return out;
+}
+template <class T>
+Tensor to_blocks(const Tensor& t, int64_t L) {
+  const int64_t N = t.size(0), Cb = t.size(1) / L, S = t.size(2) * t.size(3);
+  Tensor out = Tensor::empty({N, Cb, t.size(2), t.size(3), L}, t.dtype());
+  const T* src = t.data<T>();
+  T* dst = out.data<T>();
+  for (int64_t nc = 0; nc < N * Cb; ++nc)
+    for (int64_t l = 0; l < L; ++l)
+      for (int64_t p = 0; p < S; ++p) dst[(nc * S + p) * L + l] = src[(nc * L + l) * S + p];
+  return out;
+}
+
+bool use_onednn(const Tensor& x) {
+  return x.dtype() == DType::F32 && conv_backend() == ConvBackend::onednn;
+}
+
+// The Eigen kernels on blocked tensors: through NCHW copies.
+template <class T>
+Tensor eigen_forward(const std::vector<Tensor>& in, ConvGeometry g) {
+  if (g.block == 1) return conv_forward<T>(in, g);
+  const int64_t L = g.block;
+  g.block = 1;
+  std::vector<Tensor> nchw = in;
+  nchw[0] = unblock<T>(in[0]);
+  return to_blocks<T>(conv_forward<T>(nchw, g), L);
+}
+
+template <class T>
+std::vector<Tensor> eigen_backward(const BackwardContext& c, ConvGeometry g) {
+  if (g.block == 1) return conv_backward<T>(c, g);
+  const int64_t L = g.block;
+  g.block = 1;
+  std::vector<Tensor> inputs = c.inputs;
+  inputs[0] = unblock<T>(c.in(0));
+  const Tensor gy = unblock<T>(c.grad_output);
+  const BackwardContext nchw{inputs, c.output, gy, c.attrs, c.saved, c.needs_grad};
+  std::vector<Tensor> grads = conv_backward<T>(nchw, g);
+  if (grads[0].defined()) grads[0] = to_blocks<T>(grads[0], L);
+  return grads;
+}
+
 }  // namespace
 
 WEFT_REGISTER_OP(conv2d) {
   OpDef d;
   d.name = "conv2d";
-  d.doc = "2-D convolution, NCHW: x [N,C,H,W], weight [O,C,kh,kw], optional bias [O]; "
-          "attrs stride, padding, dilation (h, w)";
+  d.doc = "2-D convolution: x [N,C,H,W] (or blocked [N,C/L,H,W,L] with channel_block L), "
+          "weight [O,C,kh,kw], optional bias [O]; attrs stride, padding, dilation (h, w), "
+          "channel_block; float32 on the backend of ops/conv_backend.h";
   d.num_inputs = -1;  // 2 or 3 (bias)
   d.forward = [](const ForwardContext& c) {
     const ConvGeometry g = conv_geometry(c.inputs, c.attrs);
+    if (use_onednn(c.in(0)))
+      return onednn_conv_forward(c.in(0), c.in(1), c.inputs.size() == 3 ? c.in(2) : Tensor(), g);
     return dispatch_float(c.in(0).dtype(), "conv2d",
-                          [&]<class T>() { return conv_forward<T>(c.inputs, g); });
+                          [&]<class T>() { return eigen_forward<T>(c.inputs, g); });
   };
   d.backward = [](const BackwardContext& c) {
     const ConvGeometry g = conv_geometry(c.inputs, c.attrs);
+    if (use_onednn(c.in(0))) {
+      const bool has_bias = c.inputs.size() == 3;
+      ConvGradients r = onednn_conv_backward(c.in(0), c.in(1), c.grad_output, g, c.needs_grad[0],
+                                             c.needs_grad[1], has_bias && c.needs_grad[2]);
+      if (has_bias) return std::vector<Tensor>{r.x, r.w, r.bias};
+      return std::vector<Tensor>{r.x, r.w};
+    }
     return dispatch_float(c.in(0).dtype(), "conv2d",
-                          [&]<class T>() { return conv_backward<T>(c, g); });
+                          [&]<class T>() { return eigen_backward<T>(c, g); });
   };
   return d;
 }
@@ -399,7 +466,8 @@ namespace ops {
 Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias, const Conv2dOptions& o) {
   Attrs attrs{{"stride", std::vector<int64_t>{o.stride_h, o.stride_w}},
               {"padding", std::vector<int64_t>{o.pad_h, o.pad_w}},
-              {"dilation", std::vector<int64_t>{o.dilation_h, o.dilation_w}}};
+              {"dilation", std::vector<int64_t>{o.dilation_h, o.dilation_w}},
+              {"channel_block", o.channel_block}};
   if (bias.defined()) return apply("conv2d", {x, w, bias}, attrs);
   return apply("conv2d", {x, w}, attrs);
 }

@@ -67,8 +67,13 @@ Tensor linear(const Tensor& x, const Tensor& w, const Tensor& b = Tensor());
 // --- convolution and pooling (ops/conv.cpp, ops/pool.cpp), NCHW ---
 struct Conv2dOptions {
   int64_t stride_h = 1, stride_w = 1, pad_h = 0, pad_w = 0, dilation_h = 1, dilation_w = 1;
+  // 1: x [N,C,H,W] and the result [N,O,Ho,Wo]. L (8 or 16): both blocked,
+  // [N,C/L,H,W,L] and [N,O/L,Ho,Wo,L] (channel c = cb·L + l), the layout oneDNN's
+  // kernels compute in (ResNet keeps its activations so; see nn/resnet.h).
+  int64_t channel_block = 1;
 };
-// x [N,C,H,W], w [O,C,kh,kw], bias [O] or undefined.
+// x [N,C,H,W], w [O,C,kh,kw], bias [O] or undefined. float32 runs on the backend chosen
+// in ops/conv_backend.h (oneDNN by default), float64 on weft's own Eigen kernels.
 Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias = Tensor(),
               const Conv2dOptions& o = {});
 Tensor max_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding = 0);

@@ -7,6 +7,8 @@ packages=(
   libeigen3-dev libsuitesparse-dev libtbb-dev libopencv-dev libyaml-cpp-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libassimp-dev assimp-testmodels
   libgtest-dev libgmock-dev libbenchmark-dev
+  # oneDNN: the float32 convolution kernels (ops/conv_backend.h), the ones PyTorch uses.
+  libdnnl-dev
   # An optimised BLAS for CHOLMOD's supernodal factorisation (the cloth simulator): it
   # replaces the reference libblas.so.3 through Debian's alternatives; weft calls it on
   # one thread per simulation (physics/cholmod_solver.cpp). The serial and OpenMP builds

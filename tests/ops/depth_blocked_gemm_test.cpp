@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "ops/conv_backend.h"
 #include "ops/depth_blocked_gemm.h"
 #include "ops/ops.h"
 #include "tests/ops/test_util.h"
@@ -52,6 +53,9 @@ constexpr double kConvFloat32Error = 1.5e-7;
 
 // ResNet's deepest 3×3 conv: 512 channels × 9 taps = 4608 terms per output.
 TEST(DepthBlockedAccuracy, DeepConvFloat32WithinOneRoundingOfFloat64) {
+  // weft's own kernels (the oneDNN backend has its test in conv_backend_test.cpp).
+  const ConvBackend saved = conv_backend();
+  set_conv_backend(ConvBackend::eigen);
   Generator gen(3);
   const Tensor x32 = ops::relu(Tensor::randn({2, 512, 4, 4}, gen));
   const Tensor w32 = ops::scale(Tensor::randn({512, 512, 3, 3}, gen), 0.02);
@@ -70,6 +74,7 @@ TEST(DepthBlockedAccuracy, DeepConvFloat32WithinOneRoundingOfFloat64) {
   EXPECT_LE(rel_l2(f32[0], f64[0]), kConvFloat32Error) << "output";
   EXPECT_LE(rel_l2(f32[1], f64[1]), kConvFloat32Error) << "input gradient";
   EXPECT_LE(rel_l2(f32[2], f64[2]), kConvFloat32Error) << "weight gradient";
+  set_conv_backend(saved);
 }
 
 TEST(DepthBlockedAccuracy, DeepLinearFloat32WithinOneRoundingOfFloat64) {

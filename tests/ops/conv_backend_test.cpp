@@ -1,0 +1,191 @@
+// conv2d on each backend of ops/conv_backend.h and in both layouts (NCHW, channel
+// blocks): the same values as weft's float64 Eigen kernels, float32 central differences
+// for the gradients, and float32 accuracy on ResNet's deepest 3×3 conv.
+#include <gtest/gtest.h>
+
+#include "graph/autograd.h"
+#include "ops/conv_backend.h"
+#include "ops/ops.h"
+#include "tests/ops/test_util.h"
+
+namespace weft {
+namespace {
+
+using testing::rel_l2;
+
+// Sets a backend for one test and restores the previous one.
+struct BackendScope {
+  ConvBackend saved = conv_backend();
+  explicit BackendScope(ConvBackend b) { set_conv_backend(b); }
+  ~BackendScope() { set_conv_backend(saved); }
+};
+
+// [N,C,H,W] -> [N,C/L,H,W,L] and back, with the graph's own ops.
+Tensor blocked(const Tensor& x, int64_t L) {
+  const Shape s = x.shape();
+  return ops::permute(ops::reshape(x, {s[0], s[1] / L, L, s[2], s[3]}), {0, 1, 3, 4, 2});
+}
+Tensor unblocked(const Tensor& x) {
+  const Shape s = x.shape();
+  return ops::reshape(ops::permute(x, {0, 1, 4, 2, 3}), {s[0], s[1] * s[4], s[2], s[3]});
+}
+
+struct Case {
+  ConvBackend backend;
+  int64_t block;
+};
+
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << conv_backend_name(c.backend) << ", channel block " << c.block;
+}
+
+std::string case_name(const ::testing::TestParamInfo<Case>& i) {
+  return std::string(conv_backend_name(i.param.backend)) + "_block" +
+         std::to_string(i.param.block);
+}
+
+class ConvBackendLayout : public ::testing::TestWithParam<Case> {};
+
+// Forward and all three gradients of a strided 3×3 conv with bias, float32 on the
+// backend under test against float64 on the Eigen kernels (NCHW).
+TEST_P(ConvBackendLayout, MatchesFloat64Eigen) {
+  const Case k = GetParam();
+  Generator gen(11);
+  const Tensor x0 = Tensor::randn({3, 32, 9, 7}, gen);
+  const Tensor w0 = Tensor::randn({16, 32, 3, 3}, gen, DType::F32, 0.0, 0.1);
+  const Tensor b0 = Tensor::randn({16}, gen);
+  const ops::Conv2dOptions o{2, 2, 1, 1, 1, 1};
+  Tensor x64 = x0.to(DType::F64), w64 = w0.to(DType::F64), b64 = b0.to(DType::F64);
+  for (Tensor* t : {&x64, &w64, &b64}) t->set_requires_grad();
+  Tensor y64 = ops::conv2d(x64, w64, b64, o);
+  const Tensor gy = Tensor::randn(y64.shape(), gen);
+  y64.backward(gy.to(DType::F64));
+
+  BackendScope scope(k.backend);
+  Tensor x = x0.clone(), w = w0.clone(), b = b0.clone();
+  for (Tensor* t : {&x, &w, &b}) t->set_requires_grad();
+  ops::Conv2dOptions ob = o;
+  ob.channel_block = k.block;
+  Tensor y = k.block > 1 ? unblocked(ops::conv2d(blocked(x, k.block), w, b, ob))
+                         : ops::conv2d(x, w, b, ob);
+  ASSERT_EQ(y.shape(), y64.shape());
+  y.backward(gy);
+  EXPECT_LE(rel_l2(y.to_vector(), y64.to_vector()), 1e-6) << "output";
+  EXPECT_LE(rel_l2(x.grad().to_vector(), x64.grad().to_vector()), 1e-6) << "input gradient";
+  EXPECT_LE(rel_l2(w.grad().to_vector(), w64.grad().to_vector()), 1e-6) << "weight gradient";
+  EXPECT_LE(rel_l2(b.grad().to_vector(), b64.grad().to_vector()), 1e-6) << "bias gradient";
+}
+
+// The gradient check of a float32-only backend: L = Σ r ⊙ conv2d(x, w, b), analytic
+// gradients against central differences in float32 (step 1e-2 on values of order 1;
+// the loss is evaluated in double from the float32 output, so the difference quotient
+// carries about 1e-3 relative noise).
+TEST_P(ConvBackendLayout, GradientsMatchCentralDifferences) {
+  const Case k = GetParam();
+  BackendScope scope(k.backend);
+  Generator gen(5);
+  Tensor x = Tensor::randn({2, 16, 5, 6}, gen);
+  Tensor w = Tensor::randn({16, 16, 3, 3}, gen, DType::F32, 0.0, 0.2);
+  Tensor b = Tensor::randn({16}, gen);
+  ops::Conv2dOptions o{1, 2, 1, 1, 1, 1};
+  o.channel_block = k.block;
+  auto input = [&](const Tensor& t) { return k.block > 1 ? blocked(t, k.block) : t; };
+  const Shape yshape = ops::conv2d(input(x), w, b, o).shape();
+  const Tensor r = Tensor::randn(yshape, gen);
+  const std::vector<double> rv = r.to_vector();
+  auto loss = [&]() {
+    NoGradGuard no_grad;
+    const std::vector<double> y = ops::conv2d(input(x), w, b, o).to_vector();
+    double s = 0;
+    for (size_t i = 0; i < y.size(); ++i) s += y[i] * rv[i];
+    return s;
+  };
+  for (Tensor* t : {&x, &w, &b}) t->set_requires_grad();
+  ops::conv2d(input(x), w, b, o).backward(r);
+  for (Tensor* t : {&x, &w, &b}) {
+    const std::vector<double> analytic = t->grad().to_vector();
+    float* p = t->data<float>();
+    double worst = 0;
+    // Every 7th element: enough to cover each kernel tap, channel and border.
+    for (int64_t i = 0; i < t->numel(); i += 7) {
+      const float saved = p[i];
+      const float h = 1e-2f;
+      p[i] = saved + h;
+      const double up = loss();
+      p[i] = saved - h;
+      const double down = loss();
+      p[i] = saved;
+      const double numeric = (up - down) / (2.0 * h);
+      worst = std::max(worst, std::abs(numeric - analytic[i]) / std::max(1.0, std::abs(numeric)));
+    }
+    EXPECT_LE(worst, 2e-3) << "input " << shape_str(t->shape());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ConvBackendLayout,
+                         ::testing::Values(Case{ConvBackend::eigen, 1}, Case{ConvBackend::eigen, 16},
+                                           Case{ConvBackend::onednn, 1},
+                                           Case{ConvBackend::onednn, 8},
+                                           Case{ConvBackend::onednn, 16}),
+                         case_name);
+
+// ResNet's deepest 3×3 conv (512 channels × 9 taps = 4608 terms per output) in float32,
+// against float64. PyTorch 1.13's own float32 run of this case on the machine of
+// docs/BENCHMARKS.md ("conv2d backends") is 1.69e-7 (output), 2.13e-7 (input gradient)
+// and 6.5e-8 (weight gradient) off float64 (bench/conv_accuracy_torch.py); oneDNN in
+// channel blocks is PyTorch's computation and must not be further off than that.
+TEST(ConvBackendAccuracy, OneDnnBlockedWithinPyTorchsFloat32Error) {
+  BackendScope scope(ConvBackend::onednn);
+  Generator gen(3);
+  const Tensor x32 = ops::relu(Tensor::randn({2, 512, 4, 4}, gen));
+  const Tensor w32 = ops::scale(Tensor::randn({512, 512, 3, 3}, gen), 0.02);
+  const Tensor gy32 = Tensor::randn({2, 512, 4, 4}, gen);
+  ops::Conv2dOptions same{1, 1, 1, 1, 1, 1};
+  auto run = [&](DType d, int64_t block) {
+    Tensor x = x32.to(d), w = w32.to(d);
+    x.set_requires_grad();
+    w.set_requires_grad();
+    ops::Conv2dOptions o = same;
+    o.channel_block = block;
+    const Tensor y = block > 1 ? unblocked(ops::conv2d(blocked(x, block), w, Tensor(), o))
+                               : ops::conv2d(x, w, Tensor(), o);
+    y.backward(gy32.to(d));
+    return std::vector<std::vector<double>>{y.to_vector(), x.grad().to_vector(),
+                                            w.grad().to_vector()};
+  };
+  const auto f64 = run(DType::F64, 1);
+  for (int64_t block : {1, 16}) {
+    const auto f32 = run(DType::F32, block);
+    EXPECT_LE(rel_l2(f32[0], f64[0]), 1.75e-7) << "output, block " << block;
+    EXPECT_LE(rel_l2(f32[1], f64[1]), 2.2e-7) << "input gradient, block " << block;
+    EXPECT_LE(rel_l2(f32[2], f64[2]), 7e-8) << "weight gradient, block " << block;
+  }
+}
+
+TEST(ConvBackendSelection, NamesParseAndBadNamesFail) {
+  EXPECT_EQ(parse_conv_backend("eigen", "test"), ConvBackend::eigen);
+  EXPECT_EQ(parse_conv_backend("onednn", "test"), ConvBackend::onednn);
+  testing::expect_error([] { parse_conv_backend("mkl", "WEFT_CONV_BACKEND"); },
+                        {"WEFT_CONV_BACKEND", "mkl", "eigen or onednn"});
+  BackendScope scope(ConvBackend::eigen);
+  EXPECT_EQ(preferred_channel_block(), 1);
+  set_conv_backend(ConvBackend::onednn);
+  EXPECT_EQ(preferred_channel_block(), 16);
+}
+
+TEST(ConvBackendSelection, BlockedInputOfTheWrongShapeNamesTheLayout) {
+  Generator gen(1);
+  ops::Conv2dOptions o;
+  o.channel_block = 16;
+  testing::expect_error(
+      [&] { ops::conv2d(Tensor::randn({1, 16, 4, 4}, gen), Tensor::randn({16, 16, 1, 1}, gen),
+                        Tensor(), o); },
+      {"conv2d", "[N,C/16,H,W,16]"});
+  testing::expect_error(
+      [&] { ops::conv2d(Tensor::randn({1, 1, 4, 4, 16}, gen), Tensor::randn({12, 16, 1, 1}, gen),
+                        Tensor(), o); },
+      {"conv2d", "divisible by 16"});
+}
+
+}  // namespace
+}  // namespace weft
