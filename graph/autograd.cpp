@@ -133,10 +133,16 @@ void run_backward(const Tensor& root, const Tensor& grad_root, bool retain_graph
       if (grads[i].shape() != input.shape() || grads[i].dtype() != input.dtype())
         fail("backward of op '", node->op->name, "' returned ", describe(grads[i]),
              " for input ", i, " of ", describe(input));
+      const auto acc_start =
+          profiled ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
       if (auto producer = input.grad_fn())
         add_pending(pending[producer.get()], grads[i]);
       else
         accumulate_leaf(*input.impl(), std::move(grads[i]));
+      if (profiled)
+        record_op_time("(gradient accumulation)", true,
+                       std::chrono::duration<double, std::milli>(
+                           std::chrono::steady_clock::now() - acc_start).count());
     }
     if (!retain_graph) {
       // Free what this node kept for its backward; the graph cannot be run again.

@@ -46,18 +46,23 @@ void record_op_time(const std::string& op, bool backward, double milliseconds) {
   e.ms += milliseconds;
 }
 
-std::string profile_report() {
-  std::vector<std::pair<std::pair<std::string, bool>, Entry>> rows;
+std::vector<ProfileEntry> profile_entries() {
+  std::vector<ProfileEntry> rows;
   {
     std::lock_guard<std::mutex> lock(profile().mutex);
-    rows.assign(profile().entries.begin(), profile().entries.end());
+    for (const auto& [key, e] : profile().entries)
+      rows.push_back({key.first, key.second, e.calls, e.ms});
   }
-  std::sort(rows.begin(), rows.end(), [](auto& a, auto& b) { return a.second.ms > b.second.ms; });
+  std::sort(rows.begin(), rows.end(), [](auto& a, auto& b) { return a.ms > b.ms; });
+  return rows;
+}
+
+std::string profile_report() {
   std::string out = "op                          pass   calls    total ms     ms/call\n";
   char line[160];
-  for (auto& [key, e] : rows) {
-    std::snprintf(line, sizeof line, "%-27s %-5s %7lld %11.3f %11.4f\n", key.first.c_str(),
-                  key.second ? "bwd" : "fwd", e.calls, e.ms, e.ms / static_cast<double>(e.calls));
+  for (const ProfileEntry& e : profile_entries()) {
+    std::snprintf(line, sizeof line, "%-27s %-5s %7lld %11.3f %11.4f\n", e.op.c_str(),
+                  e.backward ? "bwd" : "fwd", e.calls, e.ms, e.ms / static_cast<double>(e.calls));
     out += line;
   }
   return out;

@@ -30,6 +30,7 @@ Tensor Conv2d::forward(const Tensor& x) {
   ops::Conv2dOptions o;
   o.stride_h = o.stride_w = spec_.stride;
   o.pad_h = o.pad_w = spec_.padding;
+  o.channel_block = x.dim() == 5 ? x.size(4) : 1;  // a blocked input stays blocked
   return ops::conv2d(x, weight, bias, o);
 }
 
@@ -46,7 +47,7 @@ BatchNorm2d::BatchNorm2d(int64_t channels, DType dtype, double eps, double momen
 Tensor BatchNorm2d::forward(const Tensor& x) {
   if (is_training()) num_batches_tracked.data<int64_t>()[0] += 1;
   return ops::batch_norm(x, weight, bias, running_mean, running_var, is_training(), momentum,
-                         eps);
+                         eps, x.dim() == 5 ? x.size(4) : 1);
 }
 
 Linear::Linear(int64_t in_features, int64_t out_features, Generator& gen, bool with_bias,

@@ -1,11 +1,18 @@
 #include "nn/resnet.h"
 
 #include "graph/error.h"
+#include "ops/conv_backend.h"
 #include "ops/ops.h"
 
 namespace weft::nn {
 
 namespace {
+
+// The channel block of the backend (ops/conv_backend.h) for float32; float64 always
+// runs NCHW on the Eigen kernels.
+int64_t float_channel_block(const Tensor& x) {
+  return x.dtype() == DType::F32 ? preferred_channel_block() : 1;
+}
 
 // gen null: zero weights, no random draw.
 std::shared_ptr<Conv2d> conv(int64_t in, int64_t out, int64_t kernel, int64_t stride,
@@ -121,8 +128,18 @@ Tensor ResNet::features(const Tensor& x) {
   if (x.dim() != 4 || x.size(1) != options_.in_channels)
     fail("ResNet: input ", describe(x), " is not [N, ", options_.in_channels, ", H, W]");
   Tensor y = maxpool->forward(relu->forward(bn1->forward(conv1->forward(x))));
+  // The four stages run in the convolution backend's layout: for oneDNN, channel blocks
+  // [N, C/16, H, W, 16], so that no conv reorders its activations (Conv2d and
+  // BatchNorm2d follow their input's rank).
+  const int64_t L = float_channel_block(y);
+  if (L > 1) {
+    const Shape s = y.shape();
+    y = ops::permute(ops::reshape(y, {s[0], s[1] / L, L, s[2], s[3]}), {0, 1, 3, 4, 2});
+  }
   y = layer4->forward(layer3->forward(layer2->forward(layer1->forward(y))));
-  return ops::global_avg_pool2d(y);
+  if (L == 1) return ops::global_avg_pool2d(y);
+  // Mean over H and W of [N, C/L, H, W, L]: [N, C/L, L], i.e. [N, C] in channel order.
+  return ops::reshape(ops::mean(y, {2, 3}), {y.size(0), y.size(1) * L});
 }
 
 Tensor ResNet::forward(const Tensor& x) { return fc->forward(features(x)); }

@@ -13,6 +13,23 @@ struct ResNetBenchmarkOptions {
   int64_t batch = 8, size = 128, in_channels = 3, outputs = 1000;
   int64_t steps = 10, warmup = 2;  // timed steps and untimed warm-up steps, per phase
   uint64_t seed = 0;
+  // After the timed steps, `steps` more of each phase with per-op timing on, for the
+  // breakdown below (not part of the medians above).
+  bool breakdown = false;
+};
+
+// Where a step's time goes: mean milliseconds per step of each part. The parts are
+// measured, not derived, except the "outside ops" ones: the wall time of the forward
+// or backward pass minus the ops timed inside it (graph building, the autograd engine's
+// bookkeeping, allocation between ops).
+struct StepPart {
+  std::string name;
+  double ms = 0;
+};
+struct StepBreakdown {
+  std::vector<StepPart> parts;
+  double parts_ms = 0;  // their sum
+  double step_ms = 0;   // mean wall time of the same steps, timed as a whole
 };
 
 struct ResNetBenchmarkResult {
@@ -23,6 +40,7 @@ struct ResNetBenchmarkResult {
   // Resident set after the first and the last timed training step: growth means a leak.
   double rss_first_step_mib = 0, rss_last_step_mib = 0;
   int64_t parameters = 0;
+  StepBreakdown train_breakdown, infer_breakdown;  // when options.breakdown
 };
 
 ResNetBenchmarkResult benchmark_resnet(const ResNetBenchmarkOptions& options);
