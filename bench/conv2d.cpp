@@ -4,7 +4,11 @@
 // (2·N·O·C·kh·kw·Ho·Wo flops) and forward+backward (3× that: dx and dW each cost one
 // forward's worth).
 //
+// Candidates side by side: --backend eigen (im2col + Eigen GEMM) or onednn, and
+// --block 1 (NCHW) or 16 (oneDNN's channel blocks; the stem stays NCHW, as in ResNet).
+//
 //   bench_conv2d [--repeats 7] [--batch 8] [--size 128] [--threads 2] [--layer SUBSTRING]
+//                [--backend eigen|onednn] [--block 1|16]
 #include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
@@ -18,6 +22,7 @@
 
 #include "graph/autograd.h"
 #include "graph/threads.h"
+#include "ops/conv_backend.h"
 #include "ops/ops.h"
 
 namespace {
@@ -95,6 +100,7 @@ int main(int argc, char** argv) {
   int repeats = 7, threads = 2;
   int64_t batch = 8, size = 128;
   std::string only;  // run only the layers whose name contains this
+  int64_t block = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     const long v = std::atol(argv[i + 1]);
@@ -103,6 +109,8 @@ int main(int argc, char** argv) {
     else if (a == "--batch") batch = v;
     else if (a == "--size") size = v;
     else if (a == "--threads") threads = static_cast<int>(v);
+    else if (a == "--block") block = v;
+    else if (a == "--backend") set_conv_backend(parse_conv_backend(argv[i + 1], "--backend"));
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -152,9 +160,12 @@ int main(int argc, char** argv) {
     if (!only.empty() && std::string(L.name).find(only) == std::string::npos) continue;
     const int64_t out = (L.in + 2 * L.pad - L.k) / L.stride + 1;
     const double flops = 2.0 * batch * L.O * L.C * L.k * L.k * out * out;
-    Tensor x = Tensor::randn({batch, L.C, L.in, L.in}, gen);
+    const int64_t b = L.C % block == 0 ? block : 1;
+    Tensor x = b > 1 ? Tensor::randn({batch, L.C / b, L.in, L.in, b}, gen)
+                     : Tensor::randn({batch, L.C, L.in, L.in}, gen);
     Tensor w = Tensor::randn({L.O, L.C, L.k, L.k}, gen, DType::F32, 0.0, 0.05);
-    const ops::Conv2dOptions o{L.stride, L.stride, L.pad, L.pad, 1, 1};
+    ops::Conv2dOptions o{L.stride, L.stride, L.pad, L.pad, 1, 1};
+    o.channel_block = b;
     const Timing fwd = median_time(repeats, threads, [&] {
       NoGradGuard no_grad;
       Tensor y = ops::conv2d(x, w, Tensor(), o);
@@ -162,7 +173,8 @@ int main(int argc, char** argv) {
     Tensor xg = x.clone(), wg = w.clone();
     xg.set_requires_grad();
     wg.set_requires_grad();
-    const Tensor gy = Tensor::randn({batch, L.O, out, out}, gen);
+    const Tensor gy = b > 1 ? Tensor::randn({batch, L.O / b, out, out, b}, gen)
+                            : Tensor::randn({batch, L.O, out, out}, gen);
     const Timing fb = median_time(repeats, threads, [&] {
       xg.zero_grad();
       wg.zero_grad();
@@ -175,8 +187,9 @@ int main(int argc, char** argv) {
   const double gemm_wall = gemm_flops / (0.5 * (gemm_before.wall + gemm_after.wall)) * 1e-9;
   const double gemm_cpu = gemm_flops / (0.5 * (gemm_before.cpu + gemm_after.cpu)) * 1e-9;
 
-  std::printf("conv2d, float32, batch %ld, input 3x%ldx%ld, %d threads, median of %d; "
-              "load average %s (before) %s (after)\n",
+  std::printf("conv2d, float32, backend %s, channel block %ld, batch %ld, input 3x%ldx%ld, "
+              "%d threads, median of %d; load average %s (before) %s (after)\n",
+              conv_backend_name(conv_backend()), static_cast<long>(block),
               static_cast<long>(batch), static_cast<long>(size), static_cast<long>(size),
               threads, repeats, load_before.c_str(), loadavg().c_str());
   std::printf("Eigen sgemm 1024^3: wall %.1f GFLOP/s (%.1f before, %.1f after), cpu %.1f GFLOP/s\n\n",

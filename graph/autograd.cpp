@@ -1,5 +1,8 @@
 #include "graph/autograd.h"
 
+#include <algorithm>
+#include <cstring>
+
 #include <chrono>
 #include <unordered_map>
 #include <unordered_set>
@@ -32,6 +35,19 @@ void accumulate_into(Tensor& dst, const Tensor& src) {
 }
 
 namespace {
+
+void copy_into(Tensor& dst, const Tensor& src) {
+  if (dst.shape() != src.shape() || dst.dtype() != src.dtype())
+    fail("accumulate_into: ", describe(dst), " = ", describe(src));
+  const int64_t bytes = src.numel() * static_cast<int64_t>(dtype_size(src.dtype()));
+  char* d = static_cast<char*>(dst.raw_data());
+  const char* s = static_cast<const char*>(src.raw_data());
+  constexpr int64_t kChunk = 1 << 20;
+  const int64_t chunks = (bytes + kChunk - 1) / kChunk;
+#pragma omp parallel for if (chunks > 1)
+  for (int64_t c = 0; c < chunks; ++c)
+    std::memcpy(d + c * kChunk, s + c * kChunk, std::min(kChunk, bytes - c * kChunk));
+}
 
 struct PendingGrad {
   Tensor value;
@@ -68,6 +84,11 @@ void accumulate_leaf(TensorImpl& leaf, Tensor&& g) {
     return;
   }
   Tensor acc(leaf.grad);
+  if (leaf.grad_zero_pending) {  // cleared by Tensor::clear_grad: overwrite, one pass
+    leaf.grad_zero_pending = false;
+    copy_into(acc, g);
+    return;
+  }
   accumulate_into(acc, g);
 }
 

@@ -316,17 +316,29 @@ bool Tensor::is_leaf() const { return defined() && !impl_->grad_fn; }
 
 Tensor Tensor::grad() const {
   check_defined("grad");
-  return impl_->grad ? Tensor(impl_->grad) : Tensor();
+  if (!impl_->grad) return Tensor();
+  Tensor g(impl_->grad);
+  if (impl_->grad_zero_pending) {
+    g.fill(0.0);
+    impl_->grad_zero_pending = false;
+  }
+  return g;
 }
 void Tensor::zero_grad() {
   check_defined("zero_grad");
   impl_->grad.reset();
+  impl_->grad_zero_pending = false;
+}
+void Tensor::clear_grad() {
+  check_defined("clear_grad");
+  impl_->grad_zero_pending = impl_->grad != nullptr;
 }
 void Tensor::set_grad(const Tensor& g) {
   check_defined("set_grad");
   if (g.defined() && (g.shape() != shape() || g.dtype() != dtype()))
     fail("set_grad: gradient ", describe(g), " does not match tensor ", describe(*this));
   impl_->grad = g.defined() ? g.impl_ptr() : nullptr;
+  impl_->grad_zero_pending = false;
 }
 std::shared_ptr<Node> Tensor::grad_fn() const { return defined() ? impl_->grad_fn : nullptr; }
 

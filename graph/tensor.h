@@ -42,6 +42,9 @@ struct TensorImpl {
   bool requires_grad = false;
   std::shared_ptr<Node> grad_fn;       // the op that produced this tensor (none for leaves)
   std::shared_ptr<TensorImpl> grad;    // accumulated gradient of a leaf
+  // The gradient reads as zero but its buffer has not been cleared yet
+  // (Tensor::clear_grad): grad() zeroes it, the next backward overwrites it.
+  bool grad_zero_pending = false;
 };
 
 class Tensor {
@@ -107,6 +110,10 @@ class Tensor {
   bool is_leaf() const;
   Tensor grad() const;                  // undefined until a backward reaches this leaf
   void zero_grad();                     // drops the accumulated gradient
+  // Sets the accumulated gradient to zero, keeping its buffer, without a pass over it:
+  // the buffer is zeroed when grad() is next read, or overwritten (not added to) by the
+  // next backward. A gradient tensor obtained before this call is not cleared.
+  void clear_grad();
   void set_grad(const Tensor& g);
   std::shared_ptr<Node> grad_fn() const;
   // Reverse-mode from this tensor: a one-element tensor seeds 1, any other needs an

@@ -50,6 +50,12 @@ Tensor BatchNorm2d::forward(const Tensor& x) {
                          eps, x.dim() == 5 ? x.size(4) : 1);
 }
 
+Tensor BatchNorm2d::forward_relu(const Tensor& x) {
+  if (is_training()) num_batches_tracked.data<int64_t>()[0] += 1;
+  return ops::batch_norm(x, weight, bias, running_mean, running_var, is_training(), momentum,
+                         eps, x.dim() == 5 ? x.size(4) : 1, /*relu=*/true);
+}
+
 Linear::Linear(int64_t in_features, int64_t out_features, Generator& gen, bool with_bias,
                DType dtype, bool initialise)
     : Module("Linear") {

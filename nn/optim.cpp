@@ -46,8 +46,7 @@ void Optimizer::zero_grad(bool set_to_none) {
       p.tensor.zero_grad();
       continue;
     }
-    Tensor g = p.tensor.grad();
-    if (g.defined()) g.fill(0.0);
+    p.tensor.clear_grad();  // zeroed lazily: the next backward overwrites it in one pass
   }
 }
 

@@ -24,8 +24,9 @@ class Optimizer {
   Optimizer& operator=(const Optimizer&) = delete;
 
   virtual void step() = 0;
-  // Zeroes every gradient in place (keeping its buffer: no allocation in the next
-  // backward); with set_to_none, drops them instead.
+  // Zeroes every gradient, keeping its buffer (no allocation in the next backward) and
+  // without a pass over it (Tensor::clear_grad: the next backward writes it instead of
+  // adding to it); with set_to_none, drops them instead.
   void zero_grad(bool set_to_none = false);
 
   double lr() const { return lr_; }

@@ -53,7 +53,7 @@ BasicBlock::BasicBlock(int64_t inplanes, int64_t planes, int64_t stride, Generat
 }
 
 Tensor BasicBlock::forward(const Tensor& x) {
-  Tensor out = ops::relu(bn1->forward(conv1->forward(x)));
+  Tensor out = bn1->forward_relu(conv1->forward(x));
   out = bn2->forward(conv2->forward(out));
   const Tensor identity = downsample ? downsample->forward(x) : x;
   return ops::relu(ops::add(out, identity));
@@ -73,8 +73,8 @@ Bottleneck::Bottleneck(int64_t inplanes, int64_t planes, int64_t stride, Generat
 }
 
 Tensor Bottleneck::forward(const Tensor& x) {
-  Tensor out = ops::relu(bn1->forward(conv1->forward(x)));
-  out = ops::relu(bn2->forward(conv2->forward(out)));
+  Tensor out = bn1->forward_relu(conv1->forward(x));
+  out = bn2->forward_relu(conv2->forward(out));
   out = bn3->forward(conv3->forward(out));
   const Tensor identity = downsample ? downsample->forward(x) : x;
   return ops::relu(ops::add(out, identity));
@@ -127,7 +127,7 @@ ResNet::ResNet(BlockKind kind, const std::vector<int64_t>& blocks, const ResNetO
 Tensor ResNet::features(const Tensor& x) {
   if (x.dim() != 4 || x.size(1) != options_.in_channels)
     fail("ResNet: input ", describe(x), " is not [N, ", options_.in_channels, ", H, W]");
-  Tensor y = maxpool->forward(relu->forward(bn1->forward(conv1->forward(x))));
+  Tensor y = maxpool->forward(bn1->forward_relu(conv1->forward(x)));
   // The four stages run in the convolution backend's layout: for oneDNN, channel blocks
   // [N, C/16, H, W, 16], so that no conv reorders its activations (Conv2d and
   // BatchNorm2d follow their input's rank).

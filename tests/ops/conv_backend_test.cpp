@@ -162,6 +162,36 @@ TEST(ConvBackendAccuracy, OneDnnBlockedWithinPyTorchsFloat32Error) {
   }
 }
 
+// batch_norm over channel blocks: the values, gradients and running statistics of the
+// NCHW op, lane l of block cb being channel cb·L + l.
+TEST(BlockedLayout, BatchNormMatchesNchw) {
+  Generator gen(9);
+  const Tensor x0 = Tensor::randn({3, 32, 4, 5}, gen, DType::F32, 0.5, 2.0);
+  const Tensor w0 = Tensor::randn({32}, gen), b0 = Tensor::randn({32}, gen);
+  const Tensor gy = Tensor::randn({3, 32, 4, 5}, gen);
+  for (bool training : {true, false}) {
+    auto run = [&](int64_t L) {
+      Tensor x = x0.clone(), w = w0.clone(), b = b0.clone();
+      for (Tensor* t : {&x, &w, &b}) t->set_requires_grad();
+      Tensor rm = Tensor::full({32}, 0.25), rv = Tensor::full({32}, 1.5);
+      const Tensor y =
+          L > 1 ? unblocked(ops::batch_norm(blocked(x, L), w, b, rm, rv, training, 0.1, 1e-5, L))
+                : ops::batch_norm(x, w, b, rm, rv, training);
+      y.backward(gy);
+      return std::vector<std::vector<double>>{y.to_vector(), x.grad().to_vector(),
+                                              w.grad().to_vector(), b.grad().to_vector(),
+                                              rm.to_vector(), rv.to_vector()};
+    };
+    const auto plain = run(1);
+    for (int64_t L : {8, 16}) {
+      const auto blocks = run(L);
+      for (size_t i = 0; i < plain.size(); ++i)
+        EXPECT_LE(rel_l2(blocks[i], plain[i]), 1e-7)
+            << "result " << i << ", block " << L << (training ? ", training" : ", eval");
+    }
+  }
+}
+
 TEST(ConvBackendSelection, NamesParseAndBadNamesFail) {
   EXPECT_EQ(parse_conv_backend("eigen", "test"), ConvBackend::eigen);
   EXPECT_EQ(parse_conv_backend("onednn", "test"), ConvBackend::onednn);
