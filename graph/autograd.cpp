@@ -54,19 +54,6 @@ struct PendingGrad {
   bool owned = false;  // may be modified in place
 };
 
-void add_pending(PendingGrad& p, const Tensor& g) {
-  if (!p.value.defined()) {
-    p.value = g;
-    p.owned = false;
-    return;
-  }
-  if (!p.owned) {
-    p.value = p.value.clone();
-    p.owned = true;
-  }
-  accumulate_into(p.value, g);
-}
-
 // A gradient nobody else holds (a fresh op output, in its own whole storage) becomes the
 // leaf's gradient as it is; anything shared is copied, so later accumulation into the
 // leaf's gradient cannot change a tensor someone else sees.
@@ -75,6 +62,27 @@ bool exclusively_owned(const Tensor& g) {
   return impl.use_count() == 1 && impl->storage.use_count() == 1 && impl->offset == 0 &&
          !impl->grad_fn &&
          impl->storage->bytes == static_cast<size_t>(g.numel()) * dtype_size(g.dtype());
+}
+
+// Sums the gradients reaching one tensor. A gradient nobody else holds is summed into in
+// place (a + b in either order is the same float); a shared one is copied first.
+void add_pending(PendingGrad& p, Tensor&& g) {
+  if (!p.value.defined()) {
+    p.owned = exclusively_owned(g);
+    p.value = std::move(g);
+    return;
+  }
+  if (!p.owned) {
+    if (exclusively_owned(g)) {
+      accumulate_into(g, p.value);
+      p.value = std::move(g);
+      p.owned = true;
+      return;
+    }
+    p.value = p.value.clone();
+    p.owned = true;
+  }
+  accumulate_into(p.value, g);
 }
 
 void accumulate_leaf(TensorImpl& leaf, Tensor&& g) {
@@ -157,7 +165,7 @@ void run_backward(const Tensor& root, const Tensor& grad_root, bool retain_graph
       const auto acc_start =
           profiled ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
       if (auto producer = input.grad_fn())
-        add_pending(pending[producer.get()], grads[i]);
+        add_pending(pending[producer.get()], std::move(grads[i]));
       else
         accumulate_leaf(*input.impl(), std::move(grads[i]));
       if (profiled)
