@@ -26,11 +26,13 @@ Conv2d::Conv2d(const Conv2dSpec& spec, Generator& gen) : Module("Conv2d"), spec_
   }
 }
 
-Tensor Conv2d::forward(const Tensor& x) {
+Tensor Conv2d::forward(const Tensor& x) { return forward(x, x.dim() == 5 ? x.size(4) : 1); }
+
+Tensor Conv2d::forward(const Tensor& x, int64_t block) {
   ops::Conv2dOptions o;
   o.stride_h = o.stride_w = spec_.stride;
   o.pad_h = o.pad_w = spec_.padding;
-  o.channel_block = x.dim() == 5 ? x.size(4) : 1;  // a blocked input stays blocked
+  o.channel_block = block;
   return ops::conv2d(x, weight, bias, o);
 }
 
@@ -75,7 +77,9 @@ Tensor Linear::forward(const Tensor& x) { return ops::linear(x, weight, bias); }
 
 Tensor ReLU::forward(const Tensor& x) { return ops::relu(x); }
 
-Tensor MaxPool2d::forward(const Tensor& x) { return ops::max_pool2d(x, kernel, stride, padding); }
+Tensor MaxPool2d::forward(const Tensor& x) {
+  return ops::max_pool2d(x, kernel, stride, padding, x.dim() == 5 ? x.size(4) : 1);
+}
 
 Tensor AdaptiveAvgPool2d::forward(const Tensor& x) {
   return ops::adaptive_avg_pool2d(x, out_h, out_w);

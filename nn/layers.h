@@ -27,7 +27,11 @@ struct Conv2dSpec {
 class Conv2d : public Module {
  public:
   Conv2d(const Conv2dSpec& spec, Generator& gen);
+  // The output in the input's layout: NCHW, or channel blocks for a blocked input.
   Tensor forward(const Tensor& x) override;
+  // The output in channel blocks of `block` (ops::Conv2dOptions::channel_block) whatever
+  // the input's layout: how a network's first conv enters the blocked layout.
+  Tensor forward(const Tensor& x, int64_t block);
   const Conv2dSpec& spec() const { return spec_; }
   Tensor weight, bias;
 

@@ -127,15 +127,11 @@ ResNet::ResNet(BlockKind kind, const std::vector<int64_t>& blocks, const ResNetO
 Tensor ResNet::features(const Tensor& x) {
   if (x.dim() != 4 || x.size(1) != options_.in_channels)
     fail("ResNet: input ", describe(x), " is not [N, ", options_.in_channels, ", H, W]");
-  Tensor y = maxpool->forward(bn1->forward_relu(conv1->forward(x)));
-  // The four stages run in the convolution backend's layout: for oneDNN, channel blocks
-  // [N, C/16, H, W, 16], so that no conv reorders its activations (Conv2d and
-  // BatchNorm2d follow their input's rank).
-  const int64_t L = float_channel_block(y);
-  if (L > 1) {
-    const Shape s = y.shape();
-    y = ops::permute(ops::reshape(y, {s[0], s[1] / L, L, s[2], s[3]}), {0, 1, 3, 4, 2});
-  }
+  // Everything after the stem conv runs in the convolution backend's layout: for
+  // oneDNN, channel blocks [N, C/16, H, W, 16], so that no conv reorders its activations
+  // (Conv2d, BatchNorm2d and MaxPool2d follow their input's rank).
+  const int64_t L = float_channel_block(x);
+  Tensor y = maxpool->forward(bn1->forward_relu(conv1->forward(x, L)));
   y = layer4->forward(layer3->forward(layer2->forward(layer1->forward(y))));
   if (L == 1) return ops::global_avg_pool2d(y);
   // Mean over H and W of [N, C/L, H, W, L]: [N, C/L, L], i.e. [N, C] in channel order.

@@ -53,16 +53,19 @@ ConvGeometry conv_geometry(const std::vector<Tensor>& in, const Attrs& a) {
   const int64_t block = a.get_int("channel_block", 1);
   if (block != 1 && block != 8 && block != 16)
     fail("conv2d: channel_block must be 1 (NCHW), 8 or 16; got ", block, "; ", conv_desc(x, w));
-  if (x.dim() != (block > 1 ? 5 : 4) || w.dim() != 4 || (block > 1 && x.size(4) != block))
-    fail("conv2d: expected an input ",
-         block > 1 ? "[N,C/" + std::to_string(block) + ",H,W," + std::to_string(block) + "]"
-                   : std::string("[N,C,H,W]"),
+  // A blocked output may come from a blocked or an NCHW input (rank 5 or 4).
+  const bool blocked_in = block > 1 && x.dim() == 5;
+  if ((x.dim() != 4 && !blocked_in) || w.dim() != 4 || (blocked_in && x.size(4) != block))
+    fail("conv2d: expected an input [N,C,H,W]",
+         block > 1 ? " or [N,C/" + std::to_string(block) + ",H,W," + std::to_string(block) + "]"
+                   : std::string(),
          " and a 4-D weight [O,C,kh,kw]; got ", conv_desc(x, w));
   if (x.dtype() != w.dtype()) fail("conv2d: dtype mismatch: ", conv_desc(x, w));
   if (x.dtype() == DType::I64) fail("conv2d: expected float32 or float64, got ", conv_desc(x, w));
   ConvGeometry g{};
   g.block = block;
-  g.N = x.size(0), g.C = x.size(1) * block, g.H = x.size(2), g.W = x.size(3);
+  g.in_block = blocked_in ? block : 1;
+  g.N = x.size(0), g.C = x.size(1) * g.in_block, g.H = x.size(2), g.W = x.size(3);
   if (block > 1 && w.size(0) % block != 0)
     fail("conv2d: a blocked output needs output channels divisible by ", block, "; ",
          conv_desc(x, w));
@@ -411,23 +414,23 @@ template <class T>
 Tensor eigen_forward(const std::vector<Tensor>& in, ConvGeometry g) {
   if (g.block == 1) return conv_forward<T>(in, g);
   const int64_t L = g.block;
-  g.block = 1;
   std::vector<Tensor> nchw = in;
-  nchw[0] = unblock<T>(in[0]);
+  if (g.in_block > 1) nchw[0] = unblock<T>(in[0]);
+  g.block = g.in_block = 1;
   return to_blocks<T>(conv_forward<T>(nchw, g), L);
 }
 
 template <class T>
 std::vector<Tensor> eigen_backward(const BackwardContext& c, ConvGeometry g) {
   if (g.block == 1) return conv_backward<T>(c, g);
-  const int64_t L = g.block;
-  g.block = 1;
+  const int64_t L = g.block, in_block = g.in_block;
   std::vector<Tensor> inputs = c.inputs;
-  inputs[0] = unblock<T>(c.in(0));
+  if (in_block > 1) inputs[0] = unblock<T>(c.in(0));
+  g.block = g.in_block = 1;
   const Tensor gy = unblock<T>(c.grad_output);
   const BackwardContext nchw{inputs, c.output, gy, c.attrs, c.saved, c.needs_grad};
   std::vector<Tensor> grads = conv_backward<T>(nchw, g);
-  if (grads[0].defined()) grads[0] = to_blocks<T>(grads[0], L);
+  if (grads[0].defined() && in_block > 1) grads[0] = to_blocks<T>(grads[0], L);
   return grads;
 }
 

@@ -17,6 +17,9 @@ struct ConvGeometry {
   // kernels work in, input [N, C/L, H, W, L] and output [N, O/L, Ho, Wo, L] (channel
   // c = cb·L + l), oneDNN's nChw16c.
   int64_t block;
+  // The input's channel block: block, or 1 for an NCHW input to a blocked output (the
+  // first conv of a network whose input has 3 channels).
+  int64_t in_block;
   int64_t K() const { return C * kh * kw; }
   int64_t P() const { return Ho * Wo; }
   // The input image [C, H·W] is already the column matrix.
@@ -24,7 +27,7 @@ struct ConvGeometry {
     return kh == 1 && kw == 1 && sh == 1 && sw == 1 && ph == 0 && pw == 0;
   }
   Shape input_shape() const {
-    return block > 1 ? Shape{N, C / block, H, W, block} : Shape{N, C, H, W};
+    return in_block > 1 ? Shape{N, C / in_block, H, W, in_block} : Shape{N, C, H, W};
   }
   Shape output_shape() const {
     return block > 1 ? Shape{N, O / block, Ho, Wo, block} : Shape{N, O, Ho, Wo};

@@ -41,7 +41,7 @@ struct ConvPrimitives {
 };
 
 using Key = std::tuple<int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t,
-                       int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, bool>;
+                       int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, bool>;
 
 memory::dims dims(std::initializer_list<int64_t> v) { return memory::dims(v.begin(), v.end()); }
 
@@ -63,7 +63,7 @@ struct ConvDescs {
 
 ConvDescs conv_descs(const ConvGeometry& g, bool bias) {
   ConvDescs d;
-  d.x = activation_md(dims({g.N, g.C, g.H, g.W}), g.block);
+  d.x = activation_md(dims({g.N, g.C, g.H, g.W}), g.in_block);
   d.y = activation_md(dims({g.N, g.O, g.Ho, g.Wo}), g.block);
   d.w = memory::desc(dims({g.O, g.C, g.kh, g.kw}), memory::data_type::f32, Tag::any);
   if (bias) d.b = memory::desc(dims({g.O}), memory::data_type::f32, Tag::x);
@@ -75,10 +75,11 @@ ConvDescs conv_descs(const ConvGeometry& g, bool bias) {
 
 std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias) {
   auto p = std::make_shared<ConvPrimitives>();
-  const Tag act = g.block > 1 ? blocked_tag(g.block) : Tag::nchw;
   using dt = memory::data_type;
-  p->x_md = memory::desc(dims({g.N, g.C, g.H, g.W}), dt::f32, act);
-  p->y_md = memory::desc(dims({g.N, g.O, g.Ho, g.Wo}), dt::f32, act);
+  p->x_md = memory::desc(dims({g.N, g.C, g.H, g.W}), dt::f32,
+                         g.in_block > 1 ? blocked_tag(g.in_block) : Tag::nchw);
+  p->y_md = memory::desc(dims({g.N, g.O, g.Ho, g.Wo}), dt::f32,
+                         g.block > 1 ? blocked_tag(g.block) : Tag::nchw);
   p->w_plain_md = memory::desc(dims({g.O, g.C, g.kh, g.kw}), dt::f32, Tag::oihw);
   if (bias) p->b_md = memory::desc(dims({g.O}), dt::f32, Tag::x);
   const ConvDescs d = conv_descs(g, bias);
@@ -115,7 +116,7 @@ void make_backward(ConvPrimitives& p, const ConvGeometry& g, bool bias) {
 std::string geometry_text(const ConvGeometry& g) {
   return "input [" + std::to_string(g.N) + "," + std::to_string(g.C) + "," +
          std::to_string(g.H) + "," + std::to_string(g.W) + "]" +
-         (g.block > 1 ? " in channel blocks of " + std::to_string(g.block) : "") + ", weight [" + std::to_string(g.O) + "," +
+         (g.block > 1 ? " to channel blocks of " + std::to_string(g.block) : "") + ", weight [" + std::to_string(g.O) + "," +
          std::to_string(g.C) + "," + std::to_string(g.kh) + "," + std::to_string(g.kw) + "]";
 }
 
@@ -123,7 +124,7 @@ ConvPrimitives& primitives(const ConvGeometry& g, bool bias, bool backward) {
   static std::mutex mutex;
   static std::map<Key, std::shared_ptr<ConvPrimitives>> cache;
   const Key key{g.N, g.C, g.H, g.W, g.O, g.kh, g.kw, g.sh, g.sw, g.ph, g.pw, g.dh, g.dw,
-                g.block, bias};
+                g.block, g.in_block, bias};
   std::shared_ptr<ConvPrimitives> p;
   try {
     {

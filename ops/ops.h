@@ -76,7 +76,9 @@ struct Conv2dOptions {
 // in ops/conv_backend.h (oneDNN by default), float64 on weft's own Eigen kernels.
 Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias = Tensor(),
               const Conv2dOptions& o = {});
-Tensor max_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding = 0);
+// channel_block L > 1: x is blocked [N, C/L, H, W, L] (see Conv2dOptions::channel_block).
+Tensor max_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding = 0,
+                  int64_t channel_block = 1);
 // count_include_pad = true, like PyTorch's default.
 Tensor avg_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding = 0);
 Tensor adaptive_avg_pool2d(const Tensor& x, int64_t out_h, int64_t out_w);

@@ -39,9 +39,16 @@ void for_each_window(const Geometry& g, int64_t parallel_above, Fn fn) {
 }
 
 // Square window `kernel`, `stride`, `padding`, as PyTorch checks them: padding at most
-// half the kernel (so every window holds at least one real pixel).
-PoolGeometry pool_geometry(const char* op, const Tensor& x, const Attrs& a) {
-  check_nchw(op, x);
+// half the kernel (so every window holds at least one real pixel). With `block` L > 1
+// (max_pool2d's channel_block) x is blocked [N, C/L, H, W, L] and a plane is one block.
+PoolGeometry pool_geometry(const char* op, const Tensor& x, const Attrs& a, int64_t block = 1) {
+  if (block > 1) {
+    if (x.dim() != 5 || x.size(4) != block)
+      fail(op, ": channel_block ", block, " needs x [N, C/", block, ", H, W, ", block,
+           "]; got ", describe(x));
+  } else {
+    check_nchw(op, x);
+  }
   PoolGeometry g{};
   g.planes = x.size(0) * x.size(1);
   g.H = x.size(2), g.W = x.size(3);
@@ -103,6 +110,52 @@ Tensor max_pool_backward(const Tensor& x, const PoolGeometry& g, const Tensor& g
 #pragma omp parallel for num_threads(num_threads()) if (g.planes * out > 4096)
   for (int64_t pl = 0; pl < g.planes; ++pl)
     for (int64_t o = 0; o < out; ++o) px[pl * g.H * g.W + pa[pl * out + o]] += pg[pl * out + o];
+  return gx;
+}
+
+// Blocked max pool: the L channels of a block side by side, each lane its own max and
+// argmax (the flat h·W + w within the plane), vectorised across lanes.
+template <class T, int L>
+Tensor max_pool_blocked_forward(const Tensor& x, const PoolGeometry& g, Tensor& argmax) {
+  Tensor y = Tensor::empty({x.size(0), x.size(1), g.Ho, g.Wo, L}, x.dtype());
+  argmax = Tensor::empty(y.shape(), DType::I64);
+  const T* px = x.data<T>();
+  T* py = y.data<T>();
+  int64_t* pa = argmax.data<int64_t>();
+  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
+    const T* xp = px + pl * g.H * g.W * L;
+    T best[L];
+    int64_t at[L];
+    for (int l = 0; l < L; ++l) best[l] = -std::numeric_limits<T>::infinity(), at[l] = h0 * g.W + w0;
+    for (int64_t h = h0; h < h1; ++h)
+      for (int64_t w = w0; w < w1; ++w) {
+        const T* v = xp + (h * g.W + w) * L;
+        for (int l = 0; l < L; ++l) {
+          const bool take = (v[l] > best[l]) | std::isnan(v[l]);  // NaN propagates
+          best[l] = take ? v[l] : best[l];
+          at[l] = take ? h * g.W + w : at[l];
+        }
+      }
+    for (int l = 0; l < L; ++l) py[o * L + l] = best[l], pa[o * L + l] = at[l];
+  });
+  return y;
+}
+
+template <class T, int L>
+Tensor max_pool_blocked_backward(const Tensor& x, const PoolGeometry& g, const Tensor& gy,
+                                 const Tensor& argmax) {
+  Tensor gx = Tensor::zeros(x.shape(), x.dtype());
+  const T* pg = gy.data<T>();
+  const int64_t* pa = argmax.data<int64_t>();
+  T* px = gx.data<T>();
+  const int64_t out = g.Ho * g.Wo;
+#pragma omp parallel for num_threads(num_threads()) if (g.planes * out > 4096)
+  for (int64_t pl = 0; pl < g.planes; ++pl)
+    for (int64_t o = 0; o < out; ++o)
+      for (int l = 0; l < L; ++l) {
+        const int64_t k = (pl * out + o) * L + l;
+        px[(pl * g.H * g.W + pa[k]) * L + l] += pg[k];
+      }
   return gx;
 }
 
@@ -222,19 +275,29 @@ Tensor global_backward(const Tensor& x, const Tensor& gy) {
 WEFT_REGISTER_OP(max_pool2d) {
   OpDef d;
   d.name = "max_pool2d";
-  d.doc = "max over k×k windows of [N,C,H,W] (attrs kernel, stride, padding; padding is -inf)";
+  d.doc = "max over k×k windows of [N,C,H,W], or of a blocked [N,C/L,H,W,L] with attr "
+          "channel_block L (attrs kernel, stride, padding; padding is -inf)";
   d.num_inputs = 1;
   d.forward = [](const ForwardContext& c) {
-    const PoolGeometry g = pool_geometry("max_pool2d", c.in(0), c.attrs);
+    const int64_t L = c.attrs.get_int("channel_block", 1);
+    if (L != 1 && L != 8 && L != 16)
+      fail("max_pool2d: channel_block must be 1, 8 or 16; got ", L);
+    const PoolGeometry g = pool_geometry("max_pool2d", c.in(0), c.attrs, L);
     Tensor argmax;
-    Tensor y = dispatch_float(c.in(0).dtype(), "max_pool2d",
-                              [&]<class T>() { return max_pool_forward<T>(c.in(0), g, argmax); });
+    Tensor y = dispatch_float(c.in(0).dtype(), "max_pool2d", [&]<class T>() {
+      if (L == 16) return max_pool_blocked_forward<T, 16>(c.in(0), g, argmax);
+      if (L == 8) return max_pool_blocked_forward<T, 8>(c.in(0), g, argmax);
+      return max_pool_forward<T>(c.in(0), g, argmax);
+    });
     c.saved.push_back(argmax);
     return y;
   };
   d.backward = [](const BackwardContext& c) -> std::vector<Tensor> {
-    const PoolGeometry g = pool_geometry("max_pool2d", c.in(0), c.attrs);
+    const int64_t L = c.attrs.get_int("channel_block", 1);
+    const PoolGeometry g = pool_geometry("max_pool2d", c.in(0), c.attrs, L);
     return {dispatch_float(c.in(0).dtype(), "max_pool2d", [&]<class T>() {
+      if (L == 16) return max_pool_blocked_backward<T, 16>(c.in(0), g, c.grad_output, c.saved.at(0));
+      if (L == 8) return max_pool_blocked_backward<T, 8>(c.in(0), g, c.grad_output, c.saved.at(0));
       return max_pool_backward<T>(c.in(0), g, c.grad_output, c.saved.at(0));
     })};
   };
@@ -299,8 +362,11 @@ WEFT_REGISTER_OP(global_avg_pool2d) {
 }
 
 namespace ops {
-Tensor max_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding) {
-  return apply("max_pool2d", {x}, pool_attrs(kernel, stride, padding));
+Tensor max_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding,
+                  int64_t channel_block) {
+  Attrs attrs = pool_attrs(kernel, stride, padding);
+  if (channel_block != 1) attrs.set("channel_block", channel_block);
+  return apply("max_pool2d", {x}, attrs);
 }
 Tensor avg_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding) {
   return apply("avg_pool2d", {x}, pool_attrs(kernel, stride, padding));

@@ -122,6 +122,58 @@ TEST_P(ConvBackendLayout, GradientsMatchCentralDifferences) {
   }
 }
 
+// An NCHW input with a blocked output (a network's first conv, 3 input channels), and
+// back: values and the gradients of the weights and of the NCHW input.
+TEST_P(ConvBackendLayout, NchwInputToBlockedOutput) {
+  const Case k = GetParam();
+  if (k.block == 1) GTEST_SKIP() << "needs a blocked output";
+  Generator gen(13);
+  const Tensor x0 = Tensor::randn({2, 3, 11, 11}, gen);
+  const Tensor w0 = Tensor::randn({32, 3, 7, 7}, gen, DType::F32, 0.0, 0.1);
+  const ops::Conv2dOptions o{2, 2, 3, 3, 1, 1};
+  Tensor x64 = x0.to(DType::F64), w64 = w0.to(DType::F64);
+  x64.set_requires_grad();
+  w64.set_requires_grad();
+  Tensor y64 = ops::conv2d(x64, w64, Tensor(), o);
+  const Tensor gy = Tensor::randn(y64.shape(), gen);
+  y64.backward(gy.to(DType::F64));
+
+  BackendScope scope(k.backend);
+  Tensor x = x0.clone(), w = w0.clone();
+  x.set_requires_grad();
+  w.set_requires_grad();
+  ops::Conv2dOptions ob = o;
+  ob.channel_block = k.block;
+  const Tensor yb = ops::conv2d(x, w, Tensor(), ob);
+  ASSERT_EQ(yb.dim(), 5);
+  const Tensor y = unblocked(yb);
+  y.backward(gy);
+  EXPECT_LE(rel_l2(y.to_vector(), y64.to_vector()), 1e-6) << "output";
+  EXPECT_LE(rel_l2(x.grad().to_vector(), x64.grad().to_vector()), 1e-6) << "input gradient";
+  EXPECT_LE(rel_l2(w.grad().to_vector(), w64.grad().to_vector()), 1e-6) << "weight gradient";
+}
+
+// max_pool2d over channel blocks: the values and the gradient of the NCHW op.
+TEST(BlockedLayout, MaxPoolMatchesNchw) {
+  Generator gen(17);
+  const Tensor x0 = Tensor::randn({2, 32, 9, 8}, gen);
+  const Tensor gy = Tensor::randn({2, 32, 5, 4}, gen);
+  auto run = [&](int64_t L) {
+    Tensor x = x0.clone();
+    x.set_requires_grad();
+    const Tensor y = L > 1 ? unblocked(ops::max_pool2d(blocked(x, L), 3, 2, 1, L))
+                           : ops::max_pool2d(x, 3, 2, 1);
+    y.backward(gy);
+    return std::vector<std::vector<double>>{y.to_vector(), x.grad().to_vector()};
+  };
+  const auto plain = run(1);
+  for (int64_t L : {8, 16}) {
+    const auto blocks = run(L);
+    EXPECT_EQ(blocks[0], plain[0]) << "block " << L;
+    EXPECT_EQ(blocks[1], plain[1]) << "block " << L;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, ConvBackendLayout,
                          ::testing::Values(Case{ConvBackend::eigen, 1}, Case{ConvBackend::eigen, 16},
                                            Case{ConvBackend::onednn, 1},
@@ -208,7 +260,7 @@ TEST(ConvBackendSelection, BlockedInputOfTheWrongShapeNamesTheLayout) {
   ops::Conv2dOptions o;
   o.channel_block = 16;
   testing::expect_error(
-      [&] { ops::conv2d(Tensor::randn({1, 16, 4, 4}, gen), Tensor::randn({16, 16, 1, 1}, gen),
+      [&] { ops::conv2d(Tensor::randn({1, 2, 4, 4, 8}, gen), Tensor::randn({16, 16, 1, 1}, gen),
                         Tensor(), o); },
       {"conv2d", "[N,C/16,H,W,16]"});
   testing::expect_error(
