@@ -124,16 +124,21 @@ Tensor max_pool_blocked_forward(const Tensor& x, const PoolGeometry& g, Tensor& 
   int64_t* pa = argmax.data<int64_t>();
   for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
     const T* xp = px + pl * g.H * g.W * L;
+    // Lanes in 32-bit integers beside the values (one vector each; int64 lanes and bool
+    // masks kept the compiler from vectorising this loop).
     T best[L];
-    int64_t at[L];
-    for (int l = 0; l < L; ++l) best[l] = -std::numeric_limits<T>::infinity(), at[l] = h0 * g.W + w0;
+    int32_t at[L];
+    for (int l = 0; l < L; ++l)
+      best[l] = -std::numeric_limits<T>::infinity(), at[l] = static_cast<int32_t>(h0 * g.W + w0);
     for (int64_t h = h0; h < h1; ++h)
       for (int64_t w = w0; w < w1; ++w) {
         const T* v = xp + (h * g.W + w) * L;
+        const int32_t here = static_cast<int32_t>(h * g.W + w);
+#pragma omp simd
         for (int l = 0; l < L; ++l) {
-          const bool take = (v[l] > best[l]) | std::isnan(v[l]);  // NaN propagates
+          const int32_t take = (v[l] > best[l]) | (v[l] != v[l]);  // NaN propagates
           best[l] = take ? v[l] : best[l];
-          at[l] = take ? h * g.W + w : at[l];
+          at[l] = take ? here : at[l];
         }
       }
     for (int l = 0; l < L; ++l) py[o * L + l] = best[l], pa[o * L + l] = at[l];
