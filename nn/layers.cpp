@@ -49,13 +49,13 @@ BatchNorm2d::BatchNorm2d(int64_t channels, DType dtype, double eps, double momen
 Tensor BatchNorm2d::forward(const Tensor& x) {
   if (is_training()) num_batches_tracked.data<int64_t>()[0] += 1;
   return ops::batch_norm(x, weight, bias, running_mean, running_var, is_training(), momentum,
-                         eps, x.dim() == 5 ? x.size(4) : 1);
+                         eps, {x.dim() == 5 ? x.size(4) : 1});
 }
 
-Tensor BatchNorm2d::forward_relu(const Tensor& x) {
+Tensor BatchNorm2d::forward_relu(const Tensor& x, const Tensor& residual) {
   if (is_training()) num_batches_tracked.data<int64_t>()[0] += 1;
   return ops::batch_norm(x, weight, bias, running_mean, running_var, is_training(), momentum,
-                         eps, x.dim() == 5 ? x.size(4) : 1, /*relu=*/true);
+                         eps, {x.dim() == 5 ? x.size(4) : 1, residual, /*relu=*/true});
 }
 
 Linear::Linear(int64_t in_features, int64_t out_features, Generator& gen, bool with_bias,

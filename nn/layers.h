@@ -46,8 +46,8 @@ class BatchNorm2d : public Module {
   explicit BatchNorm2d(int64_t channels, DType dtype = DType::F32, double eps = 1e-5,
                        double momentum = 0.1);
   Tensor forward(const Tensor& x) override;
-  // relu(forward(x)) in one pass over memory (ops::batch_norm's relu).
-  Tensor forward_relu(const Tensor& x);
+  // relu(forward(x) [+ residual]) in one pass over memory (ops::BatchNormExtras).
+  Tensor forward_relu(const Tensor& x, const Tensor& residual = Tensor());
   Tensor weight, bias, running_mean, running_var, num_batches_tracked;
   double eps, momentum;
 };

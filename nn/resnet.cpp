@@ -53,10 +53,9 @@ BasicBlock::BasicBlock(int64_t inplanes, int64_t planes, int64_t stride, Generat
 }
 
 Tensor BasicBlock::forward(const Tensor& x) {
-  Tensor out = bn1->forward_relu(conv1->forward(x));
-  out = bn2->forward(conv2->forward(out));
+  const Tensor out = bn1->forward_relu(conv1->forward(x));
   const Tensor identity = downsample ? downsample->forward(x) : x;
-  return ops::relu(ops::add(out, identity));
+  return bn2->forward_relu(conv2->forward(out), identity);  // relu(bn2(·) + identity)
 }
 
 Bottleneck::Bottleneck(int64_t inplanes, int64_t planes, int64_t stride, Generator* gen,
@@ -75,9 +74,8 @@ Bottleneck::Bottleneck(int64_t inplanes, int64_t planes, int64_t stride, Generat
 Tensor Bottleneck::forward(const Tensor& x) {
   Tensor out = bn1->forward_relu(conv1->forward(x));
   out = bn2->forward_relu(conv2->forward(out));
-  out = bn3->forward(conv3->forward(out));
   const Tensor identity = downsample ? downsample->forward(x) : x;
-  return ops::relu(ops::add(out, identity));
+  return bn3->forward_relu(conv3->forward(out), identity);  // relu(bn3(·) + identity)
 }
 
 ResNet::ResNet(BlockKind kind, const std::vector<int64_t>& blocks, const ResNetOptions& options)

@@ -1,8 +1,11 @@
 // batch_norm over axis 1 of x [N, C, ...] with PyTorch's semantics; or, with attr
 // channel_block L > 1, over the channels of a blocked x [N, C/L, ..., L] (channel
-// c = cb·L + l, the layout of ops::Conv2dOptions::channel_block). With attr relu,
-// the result is max(0, y) in the same pass (and the backward masks dy by it), the
-// batch_norm + relu pair of a ResNet block without the relu's passes over memory.
+// c = cb·L + l, the layout of ops::Conv2dOptions::channel_block). An optional sixth
+// input z (x's shape) is added to the result, and with attr relu the result is
+// max(0, ·), in the same pass (the backward masks dy by it and gives z that masked dy):
+// the batch_norm [+ shortcut] + relu of a ResNet block without their passes over memory.
+// Roundings are those of the unfused ops: the normalised value is rounded to T, then z
+// is added in T.
 //
 // Inputs: x, weight [C], bias [C], running_mean [C], running_var [C]; attrs training,
 // momentum, eps. With M = N · (product of the trailing axes) values per channel:
@@ -37,9 +40,9 @@ struct BnGeometry {
 };
 
 BnGeometry bn_geometry(const std::vector<Tensor>& in, const Attrs& attrs, bool training) {
-  if (in.size() != 5)
-    fail("batch_norm: expected 5 inputs (x, weight, bias, running_mean, running_var), got ",
-         in.size());
+  if (in.size() != 5 && in.size() != 6)
+    fail("batch_norm: expected 5 inputs (x, weight, bias, running_mean, running_var) or 6 "
+         "(and a residual), got ", in.size());
   const Tensor& x = in[0];
   if (x.dim() < 2) fail("batch_norm: expected x of rank >= 2 [N, C, ...], got ", describe(x));
   if (x.dtype() == DType::I64) fail("batch_norm: expected float32 or float64, got ", describe(x));
@@ -60,6 +63,8 @@ BnGeometry bn_geometry(const std::vector<Tensor>& in, const Attrs& attrs, bool t
       fail("batch_norm: ", names[i], " must be [", g.C, "] (one per channel of x); got ",
            names[i], " ", describe(in[i]), ", x ", describe(x));
   }
+  if (in.size() == 6 && (in[5].shape() != x.shape() || in[5].dtype() != x.dtype()))
+    fail("batch_norm: the residual ", describe(in[5]), " must match x ", describe(x));
   if (training && g.M() < 2)
     fail("batch_norm: training needs more than one value per channel; x ", describe(x));
   return g;
@@ -72,6 +77,7 @@ Tensor bn_forward(const ForwardContext& c, const BnGeometry& g, bool training) {
   const double eps = c.attrs.get_float("eps", 1e-5);
   const bool relu = c.attrs.get_bool("relu", false);
   const T* px = x.data<T>();
+  const T* pz = c.inputs.size() == 6 ? c.in(5).data<T>() : nullptr;
   const T* pw = c.in(1).data<T>();
   const T* pb = c.in(2).data<T>();
   // The running statistics are updated in place: the caller's tensors share this storage.
@@ -129,7 +135,17 @@ Tensor bn_forward(const ForwardContext& c, const BnGeometry& g, bool training) {
     for (int64_t n = 0; n < g.N; ++n) {
       const T* p = px + g.at(n, cb);
       T* q = py + g.at(n, cb);
-      if (relu) {
+      const T* z = pz ? pz + g.at(n, cb) : nullptr;
+      if (z && relu) {
+        for (int64_t i = 0; i < g.S; ++i)
+          for (int l = 0; l < L; ++l)
+            q[i * L + l] =
+                std::max(T(0), static_cast<T>(p[i * L + l] * a[l] + shift[l]) + z[i * L + l]);
+      } else if (z) {
+        for (int64_t i = 0; i < g.S; ++i)
+          for (int l = 0; l < L; ++l)
+            q[i * L + l] = static_cast<T>(p[i * L + l] * a[l] + shift[l]) + z[i * L + l];
+      } else if (relu) {
         for (int64_t i = 0; i < g.S; ++i)
           for (int l = 0; l < L; ++l)
             q[i * L + l] = std::max(T(0), static_cast<T>(p[i * L + l] * a[l] + shift[l]));
@@ -166,8 +182,11 @@ std::vector<Tensor> bn_backward(const BackwardContext& c, const BnGeometry& g, b
   // With relu: dy where the result was positive, else 0 (PyTorch's threshold_backward).
   const T* prelu = Relu ? c.saved.at(2).data<T>() : nullptr;
   const bool want_x = c.needs_grad[0], want_w = c.needs_grad[1], want_b = c.needs_grad[2];
-  Tensor gx, gw, gb;
+  const bool want_z = c.inputs.size() == 6 && c.needs_grad[5];
+  Tensor gx, gw, gb, gz;
   if (want_x) gx = Tensor::empty(x.shape(), x.dtype());
+  if (want_z) gz = Tensor::empty(x.shape(), x.dtype());
+  T* pgz = want_z ? gz.data<T>() : nullptr;
   if (want_w) gw = Tensor::empty({g.C}, x.dtype());
   if (want_b) gb = Tensor::empty({g.C}, x.dtype());
   T* pgx = want_x ? gx.data<T>() : nullptr;
@@ -196,7 +215,7 @@ std::vector<Tensor> bn_backward(const BackwardContext& c, const BnGeometry& g, b
       if (pgw) pgw[cb * L + l] = static_cast<T>(sum_dy_xhat[l]);
       if (pgb) pgb[cb * L + l] = static_cast<T>(sum_dy[l]);
     }
-    if (!pgx) continue;
+    if (!pgx && !pgz) continue;
     // training: dx = w·inv · (dy − mean(dy) − x̂ · mean(dy · x̂)); eval: dx = w·inv · dy
     double scale[L], mdy[L], k[L];
     for (int l = 0; l < L; ++l) {
@@ -207,8 +226,15 @@ std::vector<Tensor> bn_backward(const BackwardContext& c, const BnGeometry& g, b
     for (int64_t n = 0; n < g.N; ++n) {
       const T* p = px + g.at(n, cb);
       const T* d = pgy + g.at(n, cb);
-      T* q = pgx + g.at(n, cb);
       const T* r = Relu ? prelu + g.at(n, cb) : nullptr;
+      if (pgz) {  // the residual's gradient: the (masked) dy itself
+        T* qz = pgz + g.at(n, cb);
+        for (int64_t i = 0; i < g.S; ++i)
+          for (int l = 0; l < L; ++l)
+            qz[i * L + l] = Relu ? where_positive(r[i * L + l], d[i * L + l]) : d[i * L + l];
+      }
+      if (!pgx) continue;
+      T* q = pgx + g.at(n, cb);
       for (int64_t i = 0; i < g.S; ++i)
         for (int l = 0; l < L; ++l) {
           const T dv = Relu ? where_positive(r[i * L + l], d[i * L + l]) : d[i * L + l];
@@ -216,6 +242,7 @@ std::vector<Tensor> bn_backward(const BackwardContext& c, const BnGeometry& g, b
         }
     }
   }
+  if (c.inputs.size() == 6) return {gx, gw, gb, Tensor(), Tensor(), gz};
   return {gx, gw, gb, Tensor(), Tensor()};
 }
 
@@ -227,7 +254,7 @@ WEFT_REGISTER_OP(batch_norm) {
   d.doc = "batch normalisation over axis 1, or over the channels of a blocked x with attr "
           "channel_block (PyTorch semantics; attrs training, momentum, eps, relu (max(0, y) "
           "fused); updates the running statistics in place when training)";
-  d.num_inputs = 5;
+  d.num_inputs = -1;  // 5, or 6 with a residual
   d.forward = [](const ForwardContext& c) {
     const bool training = c.attrs.get_bool("training", false);
     const BnGeometry g = bn_geometry(c.inputs, c.attrs, training);
@@ -255,7 +282,8 @@ WEFT_REGISTER_OP(batch_norm) {
 namespace ops {
 Tensor batch_norm(const Tensor& x, const Tensor& weight, const Tensor& bias,
                   Tensor running_mean, Tensor running_var, bool training, double momentum,
-                  double eps, int64_t channel_block, bool relu) {
+                  double eps, const BatchNormExtras& extras) {
+  const int64_t channel_block = extras.channel_block;
   if (!x.defined()) fail("batch_norm: x is undefined");
   // Undefined weight/bias act as 1 and 0; undefined running statistics (allowed only in
   // training, like track_running_stats=False) are scratch tensors nobody reads.
@@ -265,13 +293,13 @@ Tensor batch_norm(const Tensor& x, const Tensor& weight, const Tensor& bias,
     fail("batch_norm: eval mode needs running_mean and running_var; x ", describe(x));
   Attrs attrs{{"training", training}, {"momentum", momentum}, {"eps", eps}};
   if (channel_block != 1) attrs.set("channel_block", channel_block);
-  if (relu) attrs.set("relu", true);
-  return apply("batch_norm",
-               {x, weight.defined() ? weight : Tensor::ones({C}, dt),
-                bias.defined() ? bias : Tensor::zeros({C}, dt),
-                running_mean.defined() ? running_mean : Tensor::zeros({C}, dt),
-                running_var.defined() ? running_var : Tensor::ones({C}, dt)},
-               attrs);
+  if (extras.relu) attrs.set("relu", true);
+  std::vector<Tensor> inputs{x, weight.defined() ? weight : Tensor::ones({C}, dt),
+                             bias.defined() ? bias : Tensor::zeros({C}, dt),
+                             running_mean.defined() ? running_mean : Tensor::zeros({C}, dt),
+                             running_var.defined() ? running_var : Tensor::ones({C}, dt)};
+  if (extras.residual.defined()) inputs.push_back(extras.residual);
+  return apply("batch_norm", inputs, attrs);
 }
 }  // namespace ops
 

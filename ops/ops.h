@@ -88,12 +88,19 @@ Tensor global_avg_pool2d(const Tensor& x);  // [N,C,H,W] -> [N,C]
 // PyTorch semantics: training normalises with the biased batch variance and updates
 // running_mean/var in place with `momentum` (running_var from the unbiased variance);
 // eval normalises with the running statistics. weight/bias may be undefined.
-// channel_block L > 1: x is blocked, [N, C/L, ..., L] (see Conv2dOptions::channel_block).
-// relu: returns relu(batch_norm(x)) in one pass (and one backward).
+// Extras computed in batch_norm's own passes over memory:
+//   channel_block L > 1: x is blocked, [N, C/L, ..., L] (Conv2dOptions::channel_block);
+//   residual (x's shape): added to the result, as a ResNet block's shortcut;
+//   relu: max(0, ·) of the result.
+// So batch_norm(x, ..., {L, z, true}) is relu(add(batch_norm(x), z)) to the last bit.
+struct BatchNormExtras {
+  int64_t channel_block = 1;
+  Tensor residual;
+  bool relu = false;
+};
 Tensor batch_norm(const Tensor& x, const Tensor& weight, const Tensor& bias,
                   Tensor running_mean, Tensor running_var, bool training,
-                  double momentum = 0.1, double eps = 1e-5, int64_t channel_block = 1,
-                  bool relu = false);
+                  double momentum = 0.1, double eps = 1e-5, const BatchNormExtras& extras = {});
 
 // --- losses (ops/loss.cpp), mean over all elements ---
 Tensor mse_loss(const Tensor& pred, const Tensor& target);

@@ -227,7 +227,7 @@ TEST(BlockedLayout, BatchNormMatchesNchw) {
       for (Tensor* t : {&x, &w, &b}) t->set_requires_grad();
       Tensor rm = Tensor::full({32}, 0.25), rv = Tensor::full({32}, 1.5);
       const Tensor y =
-          L > 1 ? unblocked(ops::batch_norm(blocked(x, L), w, b, rm, rv, training, 0.1, 1e-5, L))
+          L > 1 ? unblocked(ops::batch_norm(blocked(x, L), w, b, rm, rv, training, 0.1, 1e-5, {L}))
                 : ops::batch_norm(x, w, b, rm, rv, training);
       y.backward(gy);
       return std::vector<std::vector<double>>{y.to_vector(), x.grad().to_vector(),
@@ -242,6 +242,29 @@ TEST(BlockedLayout, BatchNormMatchesNchw) {
             << "result " << i << ", block " << L << (training ? ", training" : ", eval");
     }
   }
+}
+
+// batch_norm with a residual and relu fused is relu(add(batch_norm(x), z)) to the last
+// bit, values and gradients.
+TEST(BlockedLayout, BatchNormResidualReluIsTheUnfusedOps) {
+  Generator gen(19);
+  const Tensor x0 = Tensor::randn({2, 16, 3, 4}, gen), z0 = Tensor::randn({2, 16, 3, 4}, gen);
+  const Tensor w0 = Tensor::randn({16}, gen), b0 = Tensor::randn({16}, gen);
+  const Tensor gy = Tensor::randn({2, 16, 3, 4}, gen);
+  auto run = [&](bool fused) {
+    Tensor x = x0.clone(), z = z0.clone(), w = w0.clone(), b = b0.clone();
+    for (Tensor* t : {&x, &z, &w, &b}) t->set_requires_grad();
+    Tensor rm = Tensor::zeros({16}), rv = Tensor::ones({16});
+    const Tensor y =
+        fused ? ops::batch_norm(x, w, b, rm, rv, true, 0.1, 1e-5, {1, z, true})
+              : ops::relu(ops::add(ops::batch_norm(x, w, b, rm, rv, true), z));
+    y.backward(gy);
+    return std::vector<std::vector<double>>{y.to_vector(), x.grad().to_vector(),
+                                            z.grad().to_vector(), w.grad().to_vector(),
+                                            b.grad().to_vector(), rm.to_vector(), rv.to_vector()};
+  };
+  const auto fused = run(true), plain = run(false);
+  for (size_t i = 0; i < plain.size(); ++i) EXPECT_EQ(fused[i], plain[i]) << "result " << i;
 }
 
 TEST(ConvBackendSelection, NamesParseAndBadNamesFail) {
