@@ -92,8 +92,15 @@ void accumulate_leaf(TensorImpl& leaf, Tensor&& g) {
     return;
   }
   Tensor acc(leaf.grad);
-  if (leaf.grad_zero_pending) {  // cleared by Tensor::clear_grad: overwrite, one pass
+  if (leaf.grad_zero_pending) {  // cleared by Tensor::clear_grad: overwrite
     leaf.grad_zero_pending = false;
+    // A fresh gradient nobody else holds becomes the buffer (no pass at all) when the old
+    // buffer has no other view; the gradient tensor stays the same object.
+    if (exclusively_owned(g) && leaf.grad->storage.use_count() == 1 && leaf.grad->offset == 0) {
+      leaf.grad->storage = g.impl_ptr()->storage;
+      g = Tensor();
+      return;
+    }
     copy_into(acc, g);
     return;
   }

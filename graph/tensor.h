@@ -110,9 +110,11 @@ class Tensor {
   bool is_leaf() const;
   Tensor grad() const;                  // undefined until a backward reaches this leaf
   void zero_grad();                     // drops the accumulated gradient
-  // Sets the accumulated gradient to zero, keeping its buffer, without a pass over it:
-  // the buffer is zeroed when grad() is next read, or overwritten (not added to) by the
-  // next backward. A gradient tensor obtained before this call is not cleared.
+  // Sets the accumulated gradient to zero without a pass over it: the buffer is zeroed
+  // when grad() is next read, or replaced (not added to) by the next backward, which then
+  // hands over its freshly computed gradient, or copies it in when the old buffer is
+  // shared with a view. Read gradients through grad() after a backward: a raw pointer
+  // into the buffer from before may be stale.
   void clear_grad();
   void set_grad(const Tensor& g);
   std::shared_ptr<Node> grad_fn() const;

@@ -100,17 +100,23 @@ Tensor bn_forward(const ForwardContext& c, const BnGeometry& g, bool training) {
   for (int64_t cb = 0; cb < g.blocks(); ++cb) {
     double mu[L], var[L], a[L], shift[L];
     if (training) {
-      double s[L] = {}, ss[L] = {};
+      // One pass over x: sums of d = x − k and d² in double, with k the channel's first
+      // value, so E[d²] − E[d]² does not cancel (|E[d]| is of the order of σ).
+      double k[L], s[L] = {}, ss[L] = {};
+      for (int l = 0; l < L; ++l) k[l] = px[g.at(0, cb) + l];
       for (int64_t n = 0; n < g.N; ++n) {
         const T* p = px + g.at(n, cb);
         for (int64_t i = 0; i < g.S; ++i)
-          for (int l = 0; l < L; ++l) s[l] += p[i * L + l];
+#pragma omp simd
+          for (int l = 0; l < L; ++l) {
+            const double d = p[i * L + l] - k[l];
+            s[l] += d;
+            ss[l] += d * d;
+          }
       }
-      for (int l = 0; l < L; ++l) mu[l] = s[l] / M;
-      for (int64_t n = 0; n < g.N; ++n) {  // two-pass variance: no cancellation
-        const T* p = px + g.at(n, cb);
-        for (int64_t i = 0; i < g.S; ++i)
-          for (int l = 0; l < L; ++l) ss[l] += (p[i * L + l] - mu[l]) * (p[i * L + l] - mu[l]);
+      for (int l = 0; l < L; ++l) {
+        mu[l] = k[l] + s[l] / M;
+        ss[l] = std::max(0.0, ss[l] - s[l] * s[l] / M);
       }
       for (int l = 0; l < L; ++l) {
         const int64_t ch = cb * L + l;

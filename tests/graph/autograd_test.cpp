@@ -16,6 +16,30 @@ TEST(Autograd, GradientsAccumulateAcrossBackwardCalls) {
   EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{4, 8, 12}));
 }
 
+// clear_grad: the gradient reads as zero, the next backward replaces it (not added to),
+// the one after adds again; a view of the old buffer keeps the copy path correct.
+TEST(Autograd, ClearedGradientIsReplacedByTheNextBackward) {
+  Tensor x = Tensor::from_data({3}, std::vector<double>{1, 2, 3}, DType::F64);
+  x.set_requires_grad();
+  auto square_backward = [&] { ops::mul(x, x).backward(Tensor::ones({3}, DType::F64)); };
+  square_backward();
+  const Tensor g = x.grad();
+  x.clear_grad();
+  EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{0, 0, 0}));
+  EXPECT_EQ(g.to_vector(), (std::vector<double>{0, 0, 0}));  // the same tensor, zeroed
+  x.clear_grad();
+  square_backward();
+  EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{2, 4, 6}));
+  EXPECT_EQ(g.to_vector(), (std::vector<double>{2, 4, 6}));  // still x's gradient tensor
+  square_backward();
+  EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{4, 8, 12}));
+  const Tensor view = x.grad().slice_view(0, 1, 3);  // shares the buffer: copied into, not swapped
+  x.clear_grad();
+  square_backward();
+  EXPECT_EQ(x.grad().to_vector(), (std::vector<double>{2, 4, 6}));
+  EXPECT_EQ(view.to_vector(), (std::vector<double>{4, 6}));
+}
+
 // A leaf takes a fresh op output as its gradient without copying, but never a tensor
 // someone else holds: the output gradient the caller passed, or one shared by two inputs.
 TEST(Autograd, LeafGradientNeverAliasesTheCallersTensors) {
