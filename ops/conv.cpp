@@ -406,7 +406,7 @@ Tensor to_blocks(const Tensor& t, int64_t L) {
 }
 
 bool use_onednn(const Tensor& x) {
-  return x.dtype() == DType::F32 && conv_backend() == ConvBackend::onednn;
+  return x.dtype() == DType::F32 && conv_backend() != ConvBackend::eigen;
 }
 
 // The Eigen kernels on blocked tensors: through NCHW copies.

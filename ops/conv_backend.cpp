@@ -27,15 +27,22 @@ ConvBackend conv_backend() { return current().load(std::memory_order_relaxed); }
 void set_conv_backend(ConvBackend backend) { current().store(backend); }
 
 const char* conv_backend_name(ConvBackend backend) {
-  return backend == ConvBackend::eigen ? "eigen" : "onednn";
+  switch (backend) {
+    case ConvBackend::eigen: return "eigen";
+    case ConvBackend::onednn: return "onednn";
+    case ConvBackend::onednn_winograd: return "onednn-winograd";
+  }
+  return "?";
 }
 
 ConvBackend parse_conv_backend(const std::string& name, const std::string& where) {
   if (name == "eigen") return ConvBackend::eigen;
   if (name == "onednn") return ConvBackend::onednn;
-  fail(where, ": unknown convolution backend '", name, "' (expected eigen or onednn)");
+  if (name == "onednn-winograd") return ConvBackend::onednn_winograd;
+  fail(where, ": unknown convolution backend '", name,
+       "' (expected eigen, onednn or onednn-winograd)");
 }
 
-int64_t preferred_channel_block() { return conv_backend() == ConvBackend::onednn ? 16 : 1; }
+int64_t preferred_channel_block() { return conv_backend() == ConvBackend::eigen ? 1 : 16; }
 
 }  // namespace weft

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "graph/error.h"
+#include "ops/conv_backend.h"
 
 namespace weft {
 
@@ -29,6 +30,7 @@ dnnl::stream& thread_stream() {
 // The primitives of one geometry, made once (creating a primitive descriptor walks
 // oneDNN's implementation list: tens of microseconds, against a few milliseconds to run).
 struct ConvPrimitives {
+  dnnl::algorithm algorithm = dnnl::algorithm::convolution_direct;
   memory::desc x_md, w_plain_md, y_md, b_md;  // weft's tensors as they are
   dnnl::convolution_forward::primitive_desc fwd_pd;
   dnnl::convolution_forward fwd;
@@ -41,7 +43,8 @@ struct ConvPrimitives {
 };
 
 using Key = std::tuple<int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t,
-                       int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, bool>;
+                       int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, bool,
+                       bool>;
 
 memory::dims dims(std::initializer_list<int64_t> v) { return memory::dims(v.begin(), v.end()); }
 
@@ -73,7 +76,15 @@ ConvDescs conv_descs(const ConvGeometry& g, bool bias) {
   return d;
 }
 
-std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias) {
+// Where oneDNN-winograd uses Winograd: 3×3, stride 1, no dilation, and at least 16×16
+// output pixels (below that, its kernels were no faster than the direct ones, and at 4×4
+// 2.7× slower: docs/BENCHMARKS.md).
+bool winograd_suits(const ConvGeometry& g) {
+  return g.kh == 3 && g.kw == 3 && g.sh == 1 && g.sw == 1 && g.dh == 1 && g.dw == 1 &&
+         g.Ho * g.Wo >= 256;
+}
+
+std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias, bool winograd) {
   auto p = std::make_shared<ConvPrimitives>();
   using dt = memory::data_type;
   p->x_md = memory::desc(dims({g.N, g.C, g.H, g.W}), dt::f32,
@@ -83,14 +94,23 @@ std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias
   p->w_plain_md = memory::desc(dims({g.O, g.C, g.kh, g.kw}), dt::f32, Tag::oihw);
   if (bias) p->b_md = memory::desc(dims({g.O}), dt::f32, Tag::x);
   const ConvDescs d = conv_descs(g, bias);
-  const auto fwd_desc =
-      bias ? dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training,
-                                             dnnl::algorithm::convolution_direct, d.x, d.w, d.b,
-                                             d.y, d.stride, d.dil, d.pad, d.pad)
-           : dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training,
-                                             dnnl::algorithm::convolution_direct, d.x, d.w, d.y,
-                                             d.stride, d.dil, d.pad, d.pad);
-  p->fwd_pd = dnnl::convolution_forward::primitive_desc(fwd_desc, cpu_engine());
+  auto forward_pd = [&](dnnl::algorithm algorithm) {
+    const auto desc =
+        bias ? dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training, algorithm, d.x,
+                                               d.w, d.b, d.y, d.stride, d.dil, d.pad, d.pad)
+             : dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training, algorithm, d.x,
+                                               d.w, d.y, d.stride, d.dil, d.pad, d.pad);
+    return dnnl::convolution_forward::primitive_desc(desc, cpu_engine());
+  };
+  if (winograd) {
+    try {  // oneDNN has Winograd kernels only for some shapes and machines
+      p->fwd_pd = forward_pd(dnnl::algorithm::convolution_winograd);
+      p->algorithm = dnnl::algorithm::convolution_winograd;
+    } catch (const dnnl::error&) {
+    }
+  }
+  if (p->algorithm != dnnl::algorithm::convolution_winograd)
+    p->fwd_pd = forward_pd(dnnl::algorithm::convolution_direct);
   p->fwd = dnnl::convolution_forward(p->fwd_pd);
   return p;
 }
@@ -98,18 +118,29 @@ std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias
 void make_backward(ConvPrimitives& p, const ConvGeometry& g, bool bias) {
   const ConvDescs d = conv_descs(g, bias);
   const auto data_desc = dnnl::convolution_backward_data::desc(
-      dnnl::algorithm::convolution_direct, d.x, d.w, d.y, d.stride, d.dil, d.pad, d.pad);
+      p.algorithm, d.x, d.w, d.y, d.stride, d.dil, d.pad, d.pad);
   p.bwd_data_pd =
       dnnl::convolution_backward_data::primitive_desc(data_desc, cpu_engine(), p.fwd_pd);
   p.bwd_data = dnnl::convolution_backward_data(p.bwd_data_pd);
+  // The weight gradient always runs the direct kernels: oneDNN 2.6's Winograd backward-
+  // weights kernel crashed on ResNet-18's shapes (segfault inside its JIT code).
+  const auto direct = dnnl::algorithm::convolution_direct;
   const auto weights_desc =
-      bias ? dnnl::convolution_backward_weights::desc(dnnl::algorithm::convolution_direct, d.x,
-                                                      d.w, d.b, d.y, d.stride, d.dil, d.pad,
-                                                      d.pad)
-           : dnnl::convolution_backward_weights::desc(dnnl::algorithm::convolution_direct, d.x,
-                                                      d.w, d.y, d.stride, d.dil, d.pad, d.pad);
+      bias ? dnnl::convolution_backward_weights::desc(direct, d.x, d.w, d.b, d.y, d.stride,
+                                                      d.dil, d.pad, d.pad)
+           : dnnl::convolution_backward_weights::desc(direct, d.x, d.w, d.y, d.stride, d.dil,
+                                                      d.pad, d.pad);
+  dnnl::convolution_forward::primitive_desc hint = p.fwd_pd;
+  if (p.algorithm != direct) {
+    const auto fwd_desc =
+        bias ? dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training, direct, d.x,
+                                               d.w, d.b, d.y, d.stride, d.dil, d.pad, d.pad)
+             : dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training, direct, d.x,
+                                               d.w, d.y, d.stride, d.dil, d.pad, d.pad);
+    hint = dnnl::convolution_forward::primitive_desc(fwd_desc, cpu_engine());
+  }
   p.bwd_weights_pd =
-      dnnl::convolution_backward_weights::primitive_desc(weights_desc, cpu_engine(), p.fwd_pd);
+      dnnl::convolution_backward_weights::primitive_desc(weights_desc, cpu_engine(), hint);
   p.bwd_weights = dnnl::convolution_backward_weights(p.bwd_weights_pd);
 }
 
@@ -123,14 +154,15 @@ std::string geometry_text(const ConvGeometry& g) {
 ConvPrimitives& primitives(const ConvGeometry& g, bool bias, bool backward) {
   static std::mutex mutex;
   static std::map<Key, std::shared_ptr<ConvPrimitives>> cache;
+  const bool winograd = conv_backend() == ConvBackend::onednn_winograd && winograd_suits(g);
   const Key key{g.N, g.C, g.H, g.W, g.O, g.kh, g.kw, g.sh, g.sw, g.ph, g.pw, g.dh, g.dw,
-                g.block, g.in_block, bias};
+                g.block, g.in_block, bias, winograd};
   std::shared_ptr<ConvPrimitives> p;
   try {
     {
       std::lock_guard<std::mutex> lock(mutex);
       auto& slot = cache[key];
-      if (!slot) slot = make_primitives(g, bias);
+      if (!slot) slot = make_primitives(g, bias, winograd);
       p = slot;
     }
     if (backward) std::call_once(p->bwd_once, [&] { make_backward(*p, g, bias); });

@@ -3,6 +3,8 @@
 // for the gradients, and float32 accuracy on ResNet's deepest 3×3 conv.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "graph/autograd.h"
 #include "ops/conv_backend.h"
 #include "ops/ops.h"
@@ -40,8 +42,10 @@ void PrintTo(const Case& c, std::ostream* os) {
 }
 
 std::string case_name(const ::testing::TestParamInfo<Case>& i) {
-  return std::string(conv_backend_name(i.param.backend)) + "_block" +
-         std::to_string(i.param.block);
+  std::string name = std::string(conv_backend_name(i.param.backend)) + "_block" +
+                     std::to_string(i.param.block);
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
 }
 
 class ConvBackendLayout : public ::testing::TestWithParam<Case> {};
@@ -122,11 +126,64 @@ TEST_P(ConvBackendLayout, GradientsMatchCentralDifferences) {
   }
 }
 
+// Winograd (3×3, stride 1, 18×18 output: the shapes onednn-winograd uses it for) against
+// float64 and central differences. Its float32 error is larger than the direct kernels'
+// (docs/BENCHMARKS.md), still far below anything a network would notice.
+TEST(ConvBackendWinograd, MatchesFloat64AndCentralDifferences) {
+  BackendScope scope(ConvBackend::onednn_winograd);
+  Generator gen(23);
+  const Tensor x0 = Tensor::randn({2, 1, 18, 18, 16}, gen);
+  const Tensor w0 = Tensor::randn({16, 16, 3, 3}, gen, DType::F32, 0.0, 0.1);
+  ops::Conv2dOptions o{1, 1, 1, 1, 1, 1};
+  o.channel_block = 16;
+  Tensor x64 = x0.to(DType::F64), w64 = w0.to(DType::F64);
+  x64.set_requires_grad();
+  w64.set_requires_grad();
+  {
+    BackendScope eigen(ConvBackend::eigen);
+    Tensor y64 = ops::conv2d(x64, w64, Tensor(), o);
+    y64.backward(Tensor::ones(y64.shape(), DType::F64));
+  }
+  Tensor x = x0.clone(), w = w0.clone();
+  x.set_requires_grad();
+  w.set_requires_grad();
+  Tensor y = ops::conv2d(x, w, Tensor(), o);
+  y.backward(Tensor::ones(y.shape()));
+  {
+    BackendScope eigen(ConvBackend::eigen);
+    Tensor y64 = ops::conv2d(x64.detach(), w64.detach(), Tensor(), o);
+    EXPECT_LE(rel_l2(y.to_vector(), y64.to_vector()), 1e-5) << "output";
+  }
+  EXPECT_LE(rel_l2(x.grad().to_vector(), x64.grad().to_vector()), 1e-5) << "input gradient";
+  EXPECT_LE(rel_l2(w.grad().to_vector(), w64.grad().to_vector()), 1e-5) << "weight gradient";
+  // Central differences of L = Σ y for a few weights (the loss is a sum of 10k outputs:
+  // step 0.05 keeps the float32 noise of the difference below 1e-3 relative).
+  const std::vector<double> analytic = w.grad().to_vector();
+  float* pw = w.data<float>();
+  auto loss = [&] {
+    NoGradGuard no_grad;
+    double s = 0;
+    for (double v : ops::conv2d(x0, w, Tensor(), o).to_vector()) s += v;
+    return s;
+  };
+  for (int64_t i = 0; i < w.numel(); i += 97) {
+    const float saved = pw[i];
+    pw[i] = saved + 0.05f;
+    const double up = loss();
+    pw[i] = saved - 0.05f;
+    const double down = loss();
+    pw[i] = saved;
+    const double numeric = (up - down) / 0.1;
+    EXPECT_NEAR(analytic[i], numeric, 2e-3 * std::max(1.0, std::abs(numeric))) << "weight " << i;
+  }
+}
+
 // An NCHW input with a blocked output (a network's first conv, 3 input channels), and
 // back: values and the gradients of the weights and of the NCHW input.
-TEST_P(ConvBackendLayout, NchwInputToBlockedOutput) {
+class ConvBackendBlockedOutput : public ::testing::TestWithParam<Case> {};
+
+TEST_P(ConvBackendBlockedOutput, NchwInputToBlockedOutput) {
   const Case k = GetParam();
-  if (k.block == 1) GTEST_SKIP() << "needs a blocked output";
   Generator gen(13);
   const Tensor x0 = Tensor::randn({2, 3, 11, 11}, gen);
   const Tensor w0 = Tensor::randn({32, 3, 7, 7}, gen, DType::F32, 0.0, 0.1);
@@ -153,6 +210,11 @@ TEST_P(ConvBackendLayout, NchwInputToBlockedOutput) {
   EXPECT_LE(rel_l2(w.grad().to_vector(), w64.grad().to_vector()), 1e-6) << "weight gradient";
 }
 
+INSTANTIATE_TEST_SUITE_P(Backends, ConvBackendBlockedOutput,
+                         ::testing::Values(Case{ConvBackend::eigen, 16}, Case{ConvBackend::onednn, 8},
+                                           Case{ConvBackend::onednn, 16}),
+                         case_name);
+
 // max_pool2d over channel blocks: the values and the gradient of the NCHW op.
 TEST(BlockedLayout, MaxPoolMatchesNchw) {
   Generator gen(17);
@@ -178,7 +240,8 @@ INSTANTIATE_TEST_SUITE_P(Backends, ConvBackendLayout,
                          ::testing::Values(Case{ConvBackend::eigen, 1}, Case{ConvBackend::eigen, 16},
                                            Case{ConvBackend::onednn, 1},
                                            Case{ConvBackend::onednn, 8},
-                                           Case{ConvBackend::onednn, 16}),
+                                           Case{ConvBackend::onednn, 16},
+                                           Case{ConvBackend::onednn_winograd, 16}),
                          case_name);
 
 // ResNet's deepest 3×3 conv (512 channels × 9 taps = 4608 terms per output) in float32,
@@ -270,8 +333,9 @@ TEST(BlockedLayout, BatchNormResidualReluIsTheUnfusedOps) {
 TEST(ConvBackendSelection, NamesParseAndBadNamesFail) {
   EXPECT_EQ(parse_conv_backend("eigen", "test"), ConvBackend::eigen);
   EXPECT_EQ(parse_conv_backend("onednn", "test"), ConvBackend::onednn);
+  EXPECT_EQ(parse_conv_backend("onednn-winograd", "test"), ConvBackend::onednn_winograd);
   testing::expect_error([] { parse_conv_backend("mkl", "WEFT_CONV_BACKEND"); },
-                        {"WEFT_CONV_BACKEND", "mkl", "eigen or onednn"});
+                        {"WEFT_CONV_BACKEND", "mkl", "eigen, onednn or onednn-winograd"});
   BackendScope scope(ConvBackend::eigen);
   EXPECT_EQ(preferred_channel_block(), 1);
   set_conv_backend(ConvBackend::onednn);
