@@ -7,6 +7,7 @@
 #include "graph/error.h"
 #include "graph/profiler.h"
 #include "graph/threads.h"
+#include "ops/conv_backend.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -17,9 +18,17 @@ int main(int argc, char** argv) {
   int threads = 0;
   app.add_option("--threads", threads, "Thread budget for OpenMP and TBB (0: all cores; "
                                        "also WEFT_NUM_THREADS)");
+  std::string conv_backend;
+  app.add_option("--conv-backend", conv_backend,
+                 "float32 convolution kernels: onednn (default, PyTorch's), eigen (weft's own, "
+                 "more accurate, slower) or onednn-winograd (faster 3x3, less accurate); also "
+                 "WEFT_CONV_BACKEND")
+      ->check(CLI::IsMember({"eigen", "onednn", "onednn-winograd"}));
   app.set_version_flag("--version", "weft 0.1.0");
   app.parse_complete_callback([&] {
     if (threads > 0) weft::set_num_threads(threads);
+    if (!conv_backend.empty())
+      weft::set_conv_backend(weft::parse_conv_backend(conv_backend, "--conv-backend"));
   });
   weft::apps::add_ops_command(app);
   weft::apps::add_demo_command(app);
