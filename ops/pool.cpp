@@ -1,5 +1,5 @@
-// Pooling over the spatial axes of NCHW tensors: max_pool2d, avg_pool2d,
-// adaptive_avg_pool2d, global_avg_pool2d. Output sizes round down (PyTorch's
+// Pooling over the spatial axes of NCHW tensors: max_pool2d (also over channel blocks),
+// avg_pool2d, adaptive_avg_pool2d, global_avg_pool2d. Output sizes round down (PyTorch's
 // ceil_mode=False). Planes (n, c) are independent and run in parallel.
 #include <algorithm>
 #include <cmath>
@@ -73,51 +73,12 @@ Attrs pool_attrs(int64_t kernel, int64_t stride, int64_t padding) {
 
 // ---- max pool: padding is −∞; the flat argmax (h·W + w within the plane) is saved ----
 
-template <class T>
-Tensor max_pool_forward(const Tensor& x, const PoolGeometry& g, Tensor& argmax) {
-  Tensor y = Tensor::empty({x.size(0), x.size(1), g.Ho, g.Wo}, x.dtype());
-  argmax = Tensor::empty(y.shape(), DType::I64);
-  const T* px = x.data<T>();
-  T* py = y.data<T>();
-  int64_t* pa = argmax.data<int64_t>();
-  for_each_window(g, 16384, [&](int64_t pl, int64_t o, int64_t h0, int64_t h1, int64_t w0, int64_t w1) {
-    const T* xp = px + pl * g.H * g.W;
-    T best = -std::numeric_limits<T>::infinity();
-    int64_t at = h0 * g.W + w0;
-    for (int64_t h = h0; h < h1; ++h)
-      for (int64_t w = w0; w < w1; ++w) {
-        const T v = xp[h * g.W + w];
-        // NaN propagates, like PyTorch. Bitwise | and selects, not a branch: on data
-        // the branch mispredicts about once per window.
-        const bool take = (v > best) | std::isnan(v);
-        best = take ? v : best;
-        at = take ? h * g.W + w : at;
-      }
-    py[o] = best;
-    pa[o] = at;
-  });
-  return y;
-}
-
-template <class T>
-Tensor max_pool_backward(const Tensor& x, const PoolGeometry& g, const Tensor& gy,
-                         const Tensor& argmax) {
-  Tensor gx = Tensor::zeros(x.shape(), x.dtype());
-  const T* pg = gy.data<T>();
-  const int64_t* pa = argmax.data<int64_t>();
-  T* px = gx.data<T>();
-  const int64_t out = g.Ho * g.Wo;
-#pragma omp parallel for num_threads(num_threads()) if (g.planes * out > 4096)
-  for (int64_t pl = 0; pl < g.planes; ++pl)
-    for (int64_t o = 0; o < out; ++o) px[pl * g.H * g.W + pa[pl * out + o]] += pg[pl * out + o];
-  return gx;
-}
-
-// Blocked max pool: the L channels of a block side by side, each lane its own max and
-// argmax (the flat h·W + w within the plane), vectorised across lanes.
+// The L channels of a block side by side (L = 1: NCHW), each lane its own max and argmax
+// (the flat h·W + w within the plane), vectorised across lanes.
 template <class T, int L>
-Tensor max_pool_blocked_forward(const Tensor& x, const PoolGeometry& g, Tensor& argmax) {
-  Tensor y = Tensor::empty({x.size(0), x.size(1), g.Ho, g.Wo, L}, x.dtype());
+Tensor max_pool_forward(const Tensor& x, const PoolGeometry& g, Tensor& argmax) {
+  Tensor y = L > 1 ? Tensor::empty({x.size(0), x.size(1), g.Ho, g.Wo, L}, x.dtype())
+                   : Tensor::empty({x.size(0), x.size(1), g.Ho, g.Wo}, x.dtype());
   argmax = Tensor::empty(y.shape(), DType::I64);
   const T* px = x.data<T>();
   T* py = y.data<T>();
@@ -147,7 +108,7 @@ Tensor max_pool_blocked_forward(const Tensor& x, const PoolGeometry& g, Tensor& 
 }
 
 template <class T, int L>
-Tensor max_pool_blocked_backward(const Tensor& x, const PoolGeometry& g, const Tensor& gy,
+Tensor max_pool_backward(const Tensor& x, const PoolGeometry& g, const Tensor& gy,
                                  const Tensor& argmax) {
   Tensor gx = Tensor::zeros(x.shape(), x.dtype());
   const T* pg = gy.data<T>();
@@ -290,9 +251,9 @@ WEFT_REGISTER_OP(max_pool2d) {
     const PoolGeometry g = pool_geometry("max_pool2d", c.in(0), c.attrs, L);
     Tensor argmax;
     Tensor y = dispatch_float(c.in(0).dtype(), "max_pool2d", [&]<class T>() {
-      if (L == 16) return max_pool_blocked_forward<T, 16>(c.in(0), g, argmax);
-      if (L == 8) return max_pool_blocked_forward<T, 8>(c.in(0), g, argmax);
-      return max_pool_forward<T>(c.in(0), g, argmax);
+      if (L == 16) return max_pool_forward<T, 16>(c.in(0), g, argmax);
+      if (L == 8) return max_pool_forward<T, 8>(c.in(0), g, argmax);
+      return max_pool_forward<T, 1>(c.in(0), g, argmax);
     });
     c.saved.push_back(argmax);
     return y;
@@ -301,9 +262,10 @@ WEFT_REGISTER_OP(max_pool2d) {
     const int64_t L = c.attrs.get_int("channel_block", 1);
     const PoolGeometry g = pool_geometry("max_pool2d", c.in(0), c.attrs, L);
     return {dispatch_float(c.in(0).dtype(), "max_pool2d", [&]<class T>() {
-      if (L == 16) return max_pool_blocked_backward<T, 16>(c.in(0), g, c.grad_output, c.saved.at(0));
-      if (L == 8) return max_pool_blocked_backward<T, 8>(c.in(0), g, c.grad_output, c.saved.at(0));
-      return max_pool_backward<T>(c.in(0), g, c.grad_output, c.saved.at(0));
+      const Tensor& gy = c.grad_output;
+      if (L == 16) return max_pool_backward<T, 16>(c.in(0), g, gy, c.saved.at(0));
+      if (L == 8) return max_pool_backward<T, 8>(c.in(0), g, gy, c.saved.at(0));
+      return max_pool_backward<T, 1>(c.in(0), g, gy, c.saved.at(0));
     })};
   };
   return d;
