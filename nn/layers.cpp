@@ -1,5 +1,7 @@
 #include "nn/layers.h"
 
+#include <cmath>
+
 #include "graph/autograd.h"
 #include "graph/error.h"
 #include "nn/init.h"
@@ -36,6 +38,17 @@ Tensor Conv2d::forward(const Tensor& x, int64_t block) {
   return ops::conv2d(x, weight, bias, o);
 }
 
+Tensor Conv2d::forward_folded(const Tensor& x, int64_t block, const BatchNorm2d& bn,
+                              const Tensor& residual, bool relu) {
+  auto [scale, shift] = bn.eval_affine();
+  if (bias.defined()) shift = ops::add(shift, ops::mul(bias, scale));
+  ops::Conv2dOptions o;
+  o.stride_h = o.stride_w = spec_.stride;
+  o.pad_h = o.pad_w = spec_.padding;
+  o.channel_block = block;
+  return ops::conv2d_affine(x, weight, scale, shift, residual, relu, o);
+}
+
 BatchNorm2d::BatchNorm2d(int64_t channels, DType dtype, double eps, double momentum)
     : Module("BatchNorm2d"), eps(eps), momentum(momentum) {
   if (channels <= 0) fail("BatchNorm2d: channels ", channels, " must be positive");
@@ -50,6 +63,18 @@ Tensor BatchNorm2d::forward(const Tensor& x) {
   if (is_training()) num_batches_tracked.data<int64_t>()[0] += 1;
   return ops::batch_norm(x, weight, bias, running_mean, running_var, is_training(), momentum,
                          eps, {x.dim() == 5 ? x.size(4) : 1});
+}
+
+std::pair<Tensor, Tensor> BatchNorm2d::eval_affine() const {
+  const std::vector<double> w = weight.to_vector(), b = bias.to_vector(),
+                            m = running_mean.to_vector(), v = running_var.to_vector();
+  std::vector<double> scale(w.size()), shift(w.size());
+  for (size_t c = 0; c < w.size(); ++c) {
+    scale[c] = w[c] / std::sqrt(v[c] + eps);
+    shift[c] = b[c] - m[c] * scale[c];
+  }
+  const Shape s{static_cast<int64_t>(w.size())};
+  return {Tensor::from_data(s, scale, weight.dtype()), Tensor::from_data(s, shift, weight.dtype())};
 }
 
 Tensor BatchNorm2d::forward_relu(const Tensor& x, const Tensor& residual) {

@@ -32,6 +32,10 @@ class Conv2d : public Module {
   // The output in channel blocks of `block` (ops::Conv2dOptions::channel_block) whatever
   // the input's layout: how a network's first conv enters the blocked layout.
   Tensor forward(const Tensor& x, int64_t block);
+  // Inference (eval-mode `bn`, no gradient): relu?(bn(forward(x, block)) + residual)
+  // with the batch norm folded into the conv (ops::conv2d_affine).
+  Tensor forward_folded(const Tensor& x, int64_t block, const class BatchNorm2d& bn,
+                        const Tensor& residual = Tensor(), bool relu = false);
   const Conv2dSpec& spec() const { return spec_; }
   Tensor weight, bias;
 
@@ -48,6 +52,9 @@ class BatchNorm2d : public Module {
   Tensor forward(const Tensor& x) override;
   // relu(forward(x) [+ residual]) in one pass over memory (ops::BatchNormExtras).
   Tensor forward_relu(const Tensor& x, const Tensor& residual = Tensor());
+  // Eval mode as a per-channel affine map y = x · scale + shift, computed in double:
+  // scale = weight / sqrt(running_var + eps), shift = bias − running_mean · scale.
+  std::pair<Tensor, Tensor> eval_affine() const;
   Tensor weight, bias, running_mean, running_var, num_batches_tracked;
   double eps, momentum;
 };

@@ -1,5 +1,6 @@
 #include "nn/resnet.h"
 
+#include "graph/autograd.h"
 #include "graph/error.h"
 #include "ops/conv_backend.h"
 #include "ops/ops.h"
@@ -52,7 +53,30 @@ BasicBlock::BasicBlock(int64_t inplanes, int64_t planes, int64_t stride, Generat
     downsample = register_module("downsample", ds);
 }
 
+namespace {
+
+// Inference: every conv with its batch norm folded in, ReLU and the shortcut in the
+// conv's epilogue (Conv2d::forward_folded).
+bool folded(const Module& m) { return !m.is_training() && !grad_enabled(); }
+
+int64_t block_of(const Tensor& x) { return x.dim() == 5 ? x.size(4) : 1; }
+
+Tensor shortcut(const std::shared_ptr<Sequential>& downsample, const Tensor& x) {
+  if (!downsample) return x;
+  if (!folded(*downsample)) return downsample->forward(x);
+  auto* conv = dynamic_cast<Conv2d*>(downsample->children()[0].second.get());
+  auto* bn = dynamic_cast<BatchNorm2d*>(downsample->children()[1].second.get());
+  return conv->forward_folded(x, block_of(x), *bn);
+}
+
+}  // namespace
+
 Tensor BasicBlock::forward(const Tensor& x) {
+  if (folded(*this)) {
+    const int64_t L = block_of(x);
+    const Tensor out = conv1->forward_folded(x, L, *bn1, Tensor(), true);
+    return conv2->forward_folded(out, L, *bn2, shortcut(downsample, x), true);
+  }
   const Tensor out = bn1->forward_relu(conv1->forward(x));
   const Tensor identity = downsample ? downsample->forward(x) : x;
   return bn2->forward_relu(conv2->forward(out), identity);  // relu(bn2(·) + identity)
@@ -72,6 +96,12 @@ Bottleneck::Bottleneck(int64_t inplanes, int64_t planes, int64_t stride, Generat
 }
 
 Tensor Bottleneck::forward(const Tensor& x) {
+  if (folded(*this)) {
+    const int64_t L = block_of(x);
+    Tensor out = conv1->forward_folded(x, L, *bn1, Tensor(), true);
+    out = conv2->forward_folded(out, L, *bn2, Tensor(), true);
+    return conv3->forward_folded(out, L, *bn3, shortcut(downsample, x), true);
+  }
   Tensor out = bn1->forward_relu(conv1->forward(x));
   out = bn2->forward_relu(conv2->forward(out));
   const Tensor identity = downsample ? downsample->forward(x) : x;
@@ -129,7 +159,8 @@ Tensor ResNet::features(const Tensor& x) {
   // oneDNN, channel blocks [N, C/16, H, W, 16], so that no conv reorders its activations
   // (Conv2d, BatchNorm2d and MaxPool2d follow their input's rank).
   const int64_t L = float_channel_block(x);
-  Tensor y = maxpool->forward(bn1->forward_relu(conv1->forward(x, L)));
+  Tensor y = maxpool->forward(folded(*this) ? conv1->forward_folded(x, L, *bn1, Tensor(), true)
+                                            : bn1->forward_relu(conv1->forward(x, L)));
   y = layer4->forward(layer3->forward(layer2->forward(layer1->forward(y))));
   if (L == 1) return ops::global_avg_pool2d(y);
   // Mean over H and W of [N, C/L, H, W, L]: [N, C/L, L], i.e. [N, C] in channel order.

@@ -465,6 +465,67 @@ WEFT_REGISTER_OP(conv2d) {
   return d;
 }
 
+namespace {
+
+// y = relu?(y · scale[c] + shift[c] + z), in place, c the output channel of each element
+// (NCHW or channel blocks).
+template <class T>
+void apply_epilogue(Tensor& y, const ConvGeometry& g, const ConvEpilogue& e) {
+  T* py = y.data<T>();
+  const T* ps = e.scale.data<T>();
+  const T* pb = e.shift.data<T>();
+  const T* pz = e.residual.defined() ? e.residual.data<T>() : nullptr;
+  const int64_t L = g.block, P = g.P(), n = y.numel();
+#pragma omp parallel for num_threads(num_threads()) if (n > 65536)
+  for (int64_t i = 0; i < n; ++i) {
+    const int64_t c = L > 1 ? (i / (P * L)) % (g.O / L) * L + i % L : (i / P) % g.O;
+    T v = py[i] * ps[c] + pb[c];
+    if (pz) v += pz[i];
+    py[i] = e.relu ? std::max(T(0), v) : v;
+  }
+}
+
+}  // namespace
+
+WEFT_REGISTER_OP(conv2d_affine) {
+  OpDef d;
+  d.name = "conv2d_affine";
+  d.doc = "inference: relu?(conv2d(x, w) * scale[o] + shift[o] (+ residual)), a conv with "
+          "its batch norm folded in; inputs x, weight, scale, shift, optional residual; attrs "
+          "as conv2d and relu; no gradient";
+  d.num_inputs = -1;  // 4 or 5
+  d.differentiable = false;
+  d.forward = [](const ForwardContext& c) {
+    if (c.inputs.size() != 4 && c.inputs.size() != 5)
+      fail("conv2d_affine: expected 4 inputs (x, weight, scale, shift) or 5 (and a residual), "
+           "got ", c.inputs.size());
+    const ConvGeometry g = conv_geometry({c.in(0), c.in(1)}, c.attrs);
+    ConvEpilogue e{c.in(2), c.in(3), c.inputs.size() == 5 ? c.in(4) : Tensor(),
+                   c.attrs.get_bool("relu", false)};
+    for (const Tensor* t : {&e.scale, &e.shift})
+      if (t->dtype() != c.in(0).dtype() || t->dim() != 1 || t->size(0) != g.O)
+        fail("conv2d_affine: scale and shift must be [", g.O, "] of the input's dtype; got ",
+             describe(*t));
+    if (e.residual.defined() &&
+        (e.residual.shape() != g.output_shape() || e.residual.dtype() != c.in(0).dtype()))
+      fail("conv2d_affine: the residual ", describe(e.residual), " must match the output ",
+           shape_str(g.output_shape()));
+    if (use_onednn(c.in(0)) && g.block > 1)
+      return onednn_conv_forward(c.in(0), c.in(1), Tensor(), g, &e);
+    Tensor y = use_onednn(c.in(0))
+                   ? onednn_conv_forward(c.in(0), c.in(1), Tensor(), g)
+                   : dispatch_float(c.in(0).dtype(), "conv2d_affine", [&]<class T>() {
+                       return eigen_forward<T>({c.in(0), c.in(1)}, g);
+                     });
+    dispatch_float(y.dtype(), "conv2d_affine", [&]<class T>() {
+      apply_epilogue<T>(y, g, e);
+      return 0;
+    });
+    return y;
+  };
+  return d;
+}
+
 namespace ops {
 Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias, const Conv2dOptions& o) {
   Attrs attrs{{"stride", std::vector<int64_t>{o.stride_h, o.stride_w}},
@@ -473,6 +534,17 @@ Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias, const Conv2d
               {"channel_block", o.channel_block}};
   if (bias.defined()) return apply("conv2d", {x, w, bias}, attrs);
   return apply("conv2d", {x, w}, attrs);
+}
+
+Tensor conv2d_affine(const Tensor& x, const Tensor& w, const Tensor& scale, const Tensor& shift,
+                     const Tensor& residual, bool relu, const Conv2dOptions& o) {
+  Attrs attrs{{"stride", std::vector<int64_t>{o.stride_h, o.stride_w}},
+              {"padding", std::vector<int64_t>{o.pad_h, o.pad_w}},
+              {"dilation", std::vector<int64_t>{o.dilation_h, o.dilation_w}},
+              {"channel_block", o.channel_block},
+              {"relu", relu}};
+  if (residual.defined()) return apply("conv2d_affine", {x, w, scale, shift, residual}, attrs);
+  return apply("conv2d_affine", {x, w, scale, shift}, attrs);
 }
 }  // namespace ops
 

@@ -42,9 +42,11 @@ struct ConvPrimitives {
   dnnl::convolution_backward_weights bwd_weights;
 };
 
+// The geometry, bias, Winograd, and the epilogue's kind (0: none; else 1 + 2·residual +
+// 4·relu).
 using Key = std::tuple<int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t,
                        int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, int64_t, bool,
-                       bool>;
+                       bool, int>;
 
 memory::dims dims(std::initializer_list<int64_t> v) { return memory::dims(v.begin(), v.end()); }
 
@@ -84,7 +86,28 @@ bool winograd_suits(const ConvGeometry& g) {
          g.Ho * g.Wo >= 256;
 }
 
-std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias, bool winograd) {
+int epilogue_kind(const ConvEpilogue* e) {
+  return e ? 1 + 2 * e->residual.defined() + 4 * e->relu : 0;
+}
+
+// The epilogue as oneDNN post-ops: × scale and + shift per channel (binary ops on a
+// [1, O, 1, 1] operand), + residual (a binary add on a tensor of the output's layout),
+// then ReLU.
+dnnl::primitive_attr epilogue_attr(int kind, const memory::desc& y_md, int64_t O) {
+  dnnl::primitive_attr attr;
+  if (kind == 0) return attr;
+  const memory::desc channel(dims({1, O, 1, 1}), memory::data_type::f32, Tag::abcd);
+  dnnl::post_ops ops;
+  ops.append_binary(dnnl::algorithm::binary_mul, channel);
+  ops.append_binary(dnnl::algorithm::binary_add, channel);
+  if (kind & 2) ops.append_binary(dnnl::algorithm::binary_add, y_md);
+  if (kind & 4) ops.append_eltwise(1.0f, dnnl::algorithm::eltwise_relu, 0.0f, 0.0f);
+  attr.set_post_ops(ops);
+  return attr;
+}
+
+std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias, bool winograd,
+                                                int epilogue) {
   auto p = std::make_shared<ConvPrimitives>();
   using dt = memory::data_type;
   p->x_md = memory::desc(dims({g.N, g.C, g.H, g.W}), dt::f32,
@@ -94,13 +117,16 @@ std::shared_ptr<ConvPrimitives> make_primitives(const ConvGeometry& g, bool bias
   p->w_plain_md = memory::desc(dims({g.O, g.C, g.kh, g.kw}), dt::f32, Tag::oihw);
   if (bias) p->b_md = memory::desc(dims({g.O}), dt::f32, Tag::x);
   const ConvDescs d = conv_descs(g, bias);
+  const auto prop = epilogue ? dnnl::prop_kind::forward_inference
+                             : dnnl::prop_kind::forward_training;
+  const dnnl::primitive_attr attr = epilogue_attr(epilogue, p->y_md, g.O);
   auto forward_pd = [&](dnnl::algorithm algorithm) {
     const auto desc =
-        bias ? dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training, algorithm, d.x,
-                                               d.w, d.b, d.y, d.stride, d.dil, d.pad, d.pad)
-             : dnnl::convolution_forward::desc(dnnl::prop_kind::forward_training, algorithm, d.x,
-                                               d.w, d.y, d.stride, d.dil, d.pad, d.pad);
-    return dnnl::convolution_forward::primitive_desc(desc, cpu_engine());
+        bias ? dnnl::convolution_forward::desc(prop, algorithm, d.x, d.w, d.b, d.y, d.stride,
+                                               d.dil, d.pad, d.pad)
+             : dnnl::convolution_forward::desc(prop, algorithm, d.x, d.w, d.y, d.stride, d.dil,
+                                               d.pad, d.pad);
+    return dnnl::convolution_forward::primitive_desc(desc, attr, cpu_engine());
   };
   if (winograd) {
     try {  // oneDNN has Winograd kernels only for some shapes and machines
@@ -151,18 +177,18 @@ std::string geometry_text(const ConvGeometry& g) {
          std::to_string(g.C) + "," + std::to_string(g.kh) + "," + std::to_string(g.kw) + "]";
 }
 
-ConvPrimitives& primitives(const ConvGeometry& g, bool bias, bool backward) {
+ConvPrimitives& primitives(const ConvGeometry& g, bool bias, bool backward, int epilogue = 0) {
   static std::mutex mutex;
   static std::map<Key, std::shared_ptr<ConvPrimitives>> cache;
   const bool winograd = conv_backend() == ConvBackend::onednn_winograd && winograd_suits(g);
   const Key key{g.N, g.C, g.H, g.W, g.O, g.kh, g.kw, g.sh, g.sw, g.ph, g.pw, g.dh, g.dw,
-                g.block, g.in_block, bias, winograd};
+                g.block, g.in_block, bias, winograd, epilogue};
   std::shared_ptr<ConvPrimitives> p;
   try {
     {
       std::lock_guard<std::mutex> lock(mutex);
       auto& slot = cache[key];
-      if (!slot) slot = make_primitives(g, bias, winograd);
+      if (!slot) slot = make_primitives(g, bias, winograd, epilogue);
       p = slot;
     }
     if (backward) std::call_once(p->bwd_once, [&] { make_backward(*p, g, bias); });
@@ -216,8 +242,10 @@ void finish_output(const memory& written, const memory::desc& plain, const Tenso
 }  // namespace
 
 Tensor onednn_conv_forward(const Tensor& x, const Tensor& w, const Tensor& bias,
-                           const ConvGeometry& g) {
-  ConvPrimitives& p = primitives(g, bias.defined(), false);
+                           const ConvGeometry& g, const ConvEpilogue* epilogue) {
+  if (epilogue && g.block == 1)
+    fail("conv2d_affine (oneDNN): the epilogue needs a blocked output");
+  ConvPrimitives& p = primitives(g, bias.defined(), false, epilogue_kind(epilogue));
   Tensor y = Tensor::empty(g.output_shape(), DType::F32);
   dnnl::stream& s = thread_stream();
   const memory out = output_as(p.fwd_pd.dst_desc(), p.y_md, y, kY);
@@ -226,6 +254,14 @@ Tensor onednn_conv_forward(const Tensor& x, const Tensor& w, const Tensor& bias,
       {DNNL_ARG_WEIGHTS, input_as(p.fwd_pd.weights_desc(), p.w_plain_md, w, kW)},
       {DNNL_ARG_DST, out}};
   if (bias.defined()) args.emplace(DNNL_ARG_BIAS, wrap(p.b_md, bias));
+  if (epilogue) {
+    const memory::desc channel(dims({1, g.O, 1, 1}), memory::data_type::f32, Tag::abcd);
+    args.emplace(DNNL_ARG_ATTR_MULTIPLE_POST_OP(0) | DNNL_ARG_SRC_1, wrap(channel, epilogue->scale));
+    args.emplace(DNNL_ARG_ATTR_MULTIPLE_POST_OP(1) | DNNL_ARG_SRC_1, wrap(channel, epilogue->shift));
+    if (epilogue->residual.defined())
+      args.emplace(DNNL_ARG_ATTR_MULTIPLE_POST_OP(2) | DNNL_ARG_SRC_1,
+                   wrap(p.y_md, epilogue->residual));
+  }
   p.fwd.execute(s, args);
   finish_output(out, p.y_md, y);
   s.wait();

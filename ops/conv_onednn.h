@@ -7,9 +7,17 @@
 
 namespace weft {
 
-// bias may be undefined.
+// What conv2d_affine applies to the conv's output o, per output channel c, in the
+// kernel's own epilogue: y = relu?(o · scale[c] + shift[c] + residual).
+struct ConvEpilogue {
+  Tensor scale, shift;  // [O]
+  Tensor residual;      // the output's shape, or undefined
+  bool relu = false;
+};
+
+// bias may be undefined; epilogue (blocked outputs only) may be null.
 Tensor onednn_conv_forward(const Tensor& x, const Tensor& w, const Tensor& bias,
-                           const ConvGeometry& g);
+                           const ConvGeometry& g, const ConvEpilogue* epilogue = nullptr);
 
 struct ConvGradients {
   Tensor x, w, bias;  // undefined where not wanted

@@ -76,6 +76,12 @@ struct Conv2dOptions {
 // in ops/conv_backend.h (oneDNN by default), float64 on weft's own Eigen kernels.
 Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias = Tensor(),
               const Conv2dOptions& o = {});
+// Inference only (no gradient): relu?(conv2d(x, w) · scale[o] + shift[o] + residual), a
+// conv with its batch norm folded in (scale = γ/√(σ²+ε), shift = β − μ·scale). On oneDNN
+// with a blocked output the epilogue runs inside the conv's kernel. residual: the
+// output's shape, or undefined.
+Tensor conv2d_affine(const Tensor& x, const Tensor& w, const Tensor& scale, const Tensor& shift,
+                     const Tensor& residual, bool relu, const Conv2dOptions& o = {});
 // channel_block L > 1: x is blocked [N, C/L, H, W, L] (see Conv2dOptions::channel_block).
 Tensor max_pool2d(const Tensor& x, int64_t kernel, int64_t stride, int64_t padding = 0,
                   int64_t channel_block = 1);

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <map>
 
+#include "graph/autograd.h"
 #include "graph/error.h"
+#include "ops/conv_backend.h"
 #include "ops/ops.h"
 
 namespace weft::nn {
@@ -147,6 +149,45 @@ TEST(ResNet, ForwardShapesAndTrainEvalModes) {
 
   EXPECT_THROW(net->forward(Tensor::zeros({2, 3, 32, 32})), Error);
   EXPECT_THROW(make_resnet("resnet101"), Error);
+}
+
+// Inference without a graph folds every batch norm into its conv (ops::conv2d_affine);
+// the result is the unfolded eval forward's (run with gradients on) to float32 rounding,
+// on both convolution backends, with trained-looking batch-norm statistics.
+TEST(ResNet, FoldedInferenceMatchesTheUnfoldedEvalForward) {
+  for (ConvBackend backend : {ConvBackend::onednn, ConvBackend::eigen}) {
+    const ConvBackend saved = conv_backend();
+    set_conv_backend(backend);
+    for (const char* arch : {"resnet18", "resnet50"}) {
+      ResNetOptions o;
+      o.outputs = 7;
+      auto net = make_resnet(arch, o);
+      Generator gen(31);
+      for (auto [name, t] : net->named_buffers()) {
+        if (name.find("running_mean") != std::string::npos)
+          t.copy_from(Tensor::randn(t.shape(), gen, DType::F32, 0.0, 0.2));
+        if (name.find("running_var") != std::string::npos)
+          t.copy_from(Tensor::rand(t.shape(), gen, DType::F32, 0.5, 1.5));
+      }
+      for (auto [name, t] : net->named_parameters())
+        if (name.find("bn") != std::string::npos || name.find("downsample.1") != std::string::npos)
+          t.copy_from(Tensor::rand(t.shape(), gen, DType::F32, 0.5, 1.5));
+      net->eval();
+      Tensor x = Tensor::randn({2, 3, 64, 64}, gen);
+      x.set_requires_grad();  // a graph: the unfolded path
+      const std::vector<double> unfolded = net->forward(x).to_vector();
+      std::vector<double> foldedv;
+      {
+        NoGradGuard no_grad;
+        foldedv = net->forward(x.detach()).to_vector();
+      }
+      double num = 0, den = 0;
+      for (size_t i = 0; i < unfolded.size(); ++i)
+        num += (foldedv[i] - unfolded[i]) * (foldedv[i] - unfolded[i]), den += unfolded[i] * unfolded[i];
+      EXPECT_LE(std::sqrt(num / den), 2e-6) << arch << " on " << conv_backend_name(backend);
+    }
+    set_conv_backend(saved);
+  }
 }
 
 TEST(Module, LoadStateDictChecksEverythingFirst) {

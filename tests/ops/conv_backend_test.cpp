@@ -330,6 +330,40 @@ TEST(BlockedLayout, BatchNormResidualReluIsTheUnfusedOps) {
   for (size_t i = 0; i < plain.size(); ++i) EXPECT_EQ(fused[i], plain[i]) << "result " << i;
 }
 
+// conv2d_affine (a conv with its batch norm folded in, the shortcut and relu in the
+// epilogue) against the same arithmetic in float64 by separate ops, per backend and
+// layout, with and without the residual and the relu.
+TEST_P(ConvBackendLayout, Conv2dAffineIsConvThenAffineThenResidualThenRelu) {
+  const Case k = GetParam();
+  Generator gen(29);
+  const Tensor x0 = Tensor::randn({2, 16, 7, 6}, gen);
+  const Tensor w0 = Tensor::randn({32, 16, 3, 3}, gen, DType::F32, 0.0, 0.1);
+  const Tensor scale = Tensor::rand({32}, gen, DType::F32, 0.5, 1.5);
+  const Tensor shift = Tensor::randn({32}, gen);
+  const Tensor z0 = Tensor::randn({2, 32, 7, 6}, gen);
+  const ops::Conv2dOptions o{1, 1, 1, 1, 1, 1};
+  for (bool residual : {false, true})
+    for (bool relu : {false, true}) {
+      Tensor want = ops::conv2d(x0.to(DType::F64), w0.to(DType::F64), Tensor(), o);
+      want = ops::add(ops::mul(want, ops::reshape(scale.to(DType::F64), {1, 32, 1, 1})),
+                      ops::reshape(shift.to(DType::F64), {1, 32, 1, 1}));
+      if (residual) want = ops::add(want, z0.to(DType::F64));
+      if (relu) want = ops::relu(want);
+      BackendScope scope(k.backend);
+      ops::Conv2dOptions ob = o;
+      ob.channel_block = k.block;
+      const Tensor x = k.block > 1 ? blocked(x0, k.block) : x0;
+      const Tensor z = residual ? (k.block > 1 ? blocked(z0, k.block) : z0) : Tensor();
+      Tensor y = ops::conv2d_affine(x, w0, scale, shift, z, relu, ob);
+      if (k.block > 1) y = unblocked(y);
+      EXPECT_LE(rel_l2(y.to_vector(), want.to_vector()), 1e-6)
+          << (residual ? "residual " : "") << (relu ? "relu" : "");
+    }
+  testing::expect_error(
+      [&] { ops::conv2d_affine(x0, w0, Tensor::ones({16}), shift, Tensor(), false, o); },
+      {"conv2d_affine", "[32]"});
+}
+
 TEST(ConvBackendSelection, NamesParseAndBadNamesFail) {
   EXPECT_EQ(parse_conv_backend("eigen", "test"), ConvBackend::eigen);
   EXPECT_EQ(parse_conv_backend("onednn", "test"), ConvBackend::onednn);
