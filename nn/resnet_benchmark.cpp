@@ -48,7 +48,7 @@ double time_ms(Fn&& fn) {
 
 // Ops that get a line of their own in a breakdown; the rest are summed as "other ops".
 bool listed_op(const std::string& op) {
-  return op == "conv2d" || op == "batch_norm" || op == "relu" || op == "add" ||
+  return op == "conv2d" || op == "conv2d_affine" || op == "batch_norm" || op == "relu" || op == "add" ||
          op == "max_pool2d" || op == "linear" || op == "(gradient accumulation)";
 }
 
