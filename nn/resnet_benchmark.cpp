@@ -48,8 +48,10 @@ double time_ms(Fn&& fn) {
 
 // Ops that get a line of their own in a breakdown; the rest are summed as "other ops".
 bool listed_op(const std::string& op) {
-  return op == "conv2d" || op == "conv2d_affine" || op == "batch_norm" || op == "relu" || op == "add" ||
-         op == "max_pool2d" || op == "linear" || op == "(gradient accumulation)";
+  for (const char* name : {"conv2d", "conv2d_affine", "batch_norm", "relu", "add", "max_pool2d",
+                           "linear", "(gradient accumulation)"})
+    if (op == name) return true;
+  return false;
 }
 
 // Adds the profile recorded since the last reset (one pass) to `parts`: its ops, and the
