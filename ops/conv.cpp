@@ -527,22 +527,25 @@ WEFT_REGISTER_OP(conv2d_affine) {
 }
 
 namespace ops {
+namespace {
+Attrs conv_attrs(const Conv2dOptions& o) {
+  return {{"stride", std::vector<int64_t>{o.stride_h, o.stride_w}},
+          {"padding", std::vector<int64_t>{o.pad_h, o.pad_w}},
+          {"dilation", std::vector<int64_t>{o.dilation_h, o.dilation_w}},
+          {"channel_block", o.channel_block}};
+}
+}  // namespace
+
 Tensor conv2d(const Tensor& x, const Tensor& w, const Tensor& bias, const Conv2dOptions& o) {
-  Attrs attrs{{"stride", std::vector<int64_t>{o.stride_h, o.stride_w}},
-              {"padding", std::vector<int64_t>{o.pad_h, o.pad_w}},
-              {"dilation", std::vector<int64_t>{o.dilation_h, o.dilation_w}},
-              {"channel_block", o.channel_block}};
+  const Attrs attrs = conv_attrs(o);
   if (bias.defined()) return apply("conv2d", {x, w, bias}, attrs);
   return apply("conv2d", {x, w}, attrs);
 }
 
 Tensor conv2d_affine(const Tensor& x, const Tensor& w, const Tensor& scale, const Tensor& shift,
                      const Tensor& residual, bool relu, const Conv2dOptions& o) {
-  Attrs attrs{{"stride", std::vector<int64_t>{o.stride_h, o.stride_w}},
-              {"padding", std::vector<int64_t>{o.pad_h, o.pad_w}},
-              {"dilation", std::vector<int64_t>{o.dilation_h, o.dilation_w}},
-              {"channel_block", o.channel_block},
-              {"relu", relu}};
+  Attrs attrs = conv_attrs(o);
+  attrs.set("relu", relu);
   if (residual.defined()) return apply("conv2d_affine", {x, w, scale, shift, residual}, attrs);
   return apply("conv2d_affine", {x, w, scale, shift}, attrs);
 }
