@@ -118,6 +118,13 @@ void check(int code, const ProcessGroup& g, const char* what) {
   MPI_Error_string(code, text, &length);
   fail(g.describe(), ": MPI failed in the collective '", what, "': ", std::string(text, length));
 }
+
+// One blocking in-place all-reduce of `n` values, under the group's deadline.
+void all_reduce(const ProcessGroup& g, void* values, size_t n, MPI_Datatype type, MPI_Op op,
+                const char* what) {
+  Deadline deadline(g, what);
+  check(MPI_Allreduce(MPI_IN_PLACE, values, int(n), type, op, MPI_COMM_WORLD), g, what);
+}
 #endif
 
 }  // namespace
@@ -188,27 +195,21 @@ void ProcessGroup::all_reduce_sum(std::span<float> values, const char* what, int
 void ProcessGroup::all_reduce_sum(std::span<double> values, const char* what) {
   if (!distributed() || values.empty()) return;
 #ifdef WEFT_WITH_MPI
-  Deadline deadline(*this, what);
-  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), int(values.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD), *this,
-        what);
+  all_reduce(*this, values.data(), values.size(), MPI_DOUBLE, MPI_SUM, what);
 #endif
 }
 
 void ProcessGroup::all_reduce_min(std::span<uint64_t> values, const char* what) {
   if (!distributed() || values.empty()) return;
 #ifdef WEFT_WITH_MPI
-  Deadline deadline(*this, what);
-  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), int(values.size()), MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD), *this,
-        what);
+  all_reduce(*this, values.data(), values.size(), MPI_UINT64_T, MPI_MIN, what);
 #endif
 }
 
 void ProcessGroup::all_reduce_max(std::span<uint64_t> values, const char* what) {
   if (!distributed() || values.empty()) return;
 #ifdef WEFT_WITH_MPI
-  Deadline deadline(*this, what);
-  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), int(values.size()), MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD), *this,
-        what);
+  all_reduce(*this, values.data(), values.size(), MPI_UINT64_T, MPI_MAX, what);
 #endif
 }
 
