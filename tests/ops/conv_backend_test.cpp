@@ -364,6 +364,29 @@ TEST_P(ConvBackendLayout, Conv2dAffineIsConvThenAffineThenResidualThenRelu) {
       {"conv2d_affine", "[32]"});
 }
 
+// batch_norm and max_pool2d name the blocked layout they expected.
+TEST(BlockedLayout, WrongLayoutsNameWhatWasExpected) {
+  Generator gen(37);
+  const Tensor nchw = Tensor::randn({2, 16, 4, 4}, gen);
+  const Tensor blocks8 = Tensor::randn({2, 2, 4, 4, 8}, gen);
+  testing::expect_error(
+      [&] {
+        ops::batch_norm(nchw, Tensor(), Tensor(), Tensor::zeros({16}), Tensor::ones({16}), true,
+                        0.1, 1e-5, {16});
+      },
+      {"batch_norm", "channel_block 16", "[N, C/16, ..., 16]"});
+  testing::expect_error(
+      [&] {
+        ops::batch_norm(blocks8, Tensor(), Tensor(), Tensor::zeros({16}), Tensor::ones({16}), true,
+                        0.1, 1e-5, {8, Tensor::zeros({2, 16, 4, 4}), false});
+      },
+      {"batch_norm", "residual", "must match x"});
+  testing::expect_error([&] { ops::max_pool2d(blocks8, 3, 2, 1, 16); },
+                        {"max_pool2d", "channel_block 16", "[N, C/16, H, W, 16]"});
+  testing::expect_error([&] { ops::max_pool2d(nchw, 3, 2, 1, 4); },
+                        {"max_pool2d", "channel_block must be 1, 8 or 16"});
+}
+
 TEST(ConvBackendSelection, NamesParseAndBadNamesFail) {
   EXPECT_EQ(parse_conv_backend("eigen", "test"), ConvBackend::eigen);
   EXPECT_EQ(parse_conv_backend("onednn", "test"), ConvBackend::onednn);
