@@ -8,7 +8,9 @@ packages=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libassimp-dev assimp-testmodels
   libgtest-dev libgmock-dev libbenchmark-dev
   # oneDNN: the float32 convolution kernels (ops/conv_backend.h), the ones PyTorch uses.
-  libdnnl-dev
+  # Debian's dnnl-config.cmake looks for OpenCL, which libdnnl-dev does not pull in
+  # without recommends: CMake's configure fails without the ICD loader's dev package.
+  libdnnl-dev ocl-icd-opencl-dev
   # An optimised BLAS for CHOLMOD's supernodal factorisation (the cloth simulator): it
   # replaces the reference libblas.so.3 through Debian's alternatives; weft calls it on
   # one thread per simulation (physics/cholmod_solver.cpp). The serial and OpenMP builds
@@ -17,6 +19,10 @@ packages=(
   # MPI for data-parallel `weft train` over several processes or machines (optional at
   # build time: CMake's WEFT_WITH_MPI is on when it is found).
   libopenmpi-dev openmpi-bin
+  # Test time only: the PyTorch parity tests (tests/nn/torch_parity_integration_test.cpp)
+  # run bench/resnet_torch_parity.py with Debian's PyTorch and torchvision. weft itself
+  # never needs Python.
+  python3 python3-torch python3-torchvision
 )
 missing=()
 for p in "${packages[@]}"; do

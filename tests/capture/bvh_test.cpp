@@ -254,8 +254,7 @@ TEST(Bvh, SkeletonFromBvhMatchesBvhKinematics) {
 }
 
 TEST(Bvh, CmuClips) {
-  if (!std::filesystem::exists(kCmuDir + "01_01.bvh"))
-    GTEST_SKIP() << "CMU clips not found in " << kCmuDir << " (Debian package assimp-testmodels)";
+  REQUIRE_DEBIAN_FILE(kCmuDir + "01_01.bvh", "assimp-testmodels");
   for (const auto& [file, frames] : {std::pair<std::string, int>{"01_01.bvh", 2752}, {"01_03.bvh", 4511}}) {
     const BvhMotion m = read_bvh(kCmuDir + file);
     EXPECT_EQ(m.num_joints_without_end_sites(), 31) << file;

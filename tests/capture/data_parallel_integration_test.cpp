@@ -158,12 +158,13 @@ int64_t last_logged_step(const fs::path& run) {
 }  // namespace
 
 TEST(DataParallel, TwoRanksMatchTwoShardsOnOneProcessAndSurviveTheDeathOrHangOfARank) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   if (!weft::nn::ProcessGroup::built_with_mpi())
-    GTEST_SKIP() << "weft was built without MPI (WEFT_WITH_MPI off: libopenmpi-dev was missing at configure time; "
-                    "scripts/setup.sh installs it)";
+    GTEST_FAIL() << "weft was built without MPI (WEFT_WITH_MPI off: libopenmpi-dev was missing at configure time); "
+                    "install it with scripts/setup.sh (or apt-get install libopenmpi-dev) and configure again";
   const std::string mpirun = find_mpirun();
-  if (mpirun.empty()) GTEST_SKIP() << "mpirun is not on PATH (scripts/setup.sh installs openmpi-bin)";
+  if (mpirun.empty())
+    GTEST_FAIL() << "mpirun is not on PATH: install it with scripts/setup.sh (or apt-get install openmpi-bin)";
   const fs::path root = scratch();
   fs::remove_all(root);
   fs::create_directories(root);

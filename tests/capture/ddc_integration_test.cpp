@@ -9,17 +9,16 @@
 #include "capture/character/character.h"
 #include "capture/io/mesh_io.h"
 #include "capture/character/skeletool_io.h"
+#include "tests/test_requirements.h"
 
 using namespace weft::capture;
 
 namespace {
 
-const std::string kDdc = WEFT_SOURCE_DIR "/../shared/data/ddc";
+const std::string& kDdc = weft::testing::kDdcDir;
 const std::string kConfig = WEFT_SOURCE_DIR "/configs/characters/ddc.yaml";
 
-#define REQUIRE_DDC()                                                                  \
-  if (!std::filesystem::exists(kDdc + "/ddc.skeleton"))                                \
-  GTEST_SKIP() << "ddc data not found at " << kDdc << " (see its README); skipping"
+#define REQUIRE_DDC() REQUIRE_DDC_DATA()
 
 TEST(Ddc, LoadsTheTemplate) {
   REQUIRE_DDC();

@@ -43,7 +43,7 @@ Vector3d joint(const Character& ch, const std::string& name) {
 }  // namespace
 
 TEST(DefaultCharacterFile, MakeHumanBodyHasTheDocumentedNumbers) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const LoadedBody b = load_body_mesh(kHuman, 0);
   EXPECT_EQ(b.file_vertices, 14517);          // after JoinIdenticalVertices (split at UV seams)
   EXPECT_EQ(b.mesh.num_vertices(), 13380);    // welded by position: MakeHuman's base mesh
@@ -66,7 +66,7 @@ TEST(DefaultCharacterFile, MakeHumanBodyHasTheDocumentedNumbers) {
 }
 
 TEST(DefaultCharacterFit, JointsLieInsideTheBody) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = skirt().character;
   const TriangleMesh& body = ch.body.mesh;
   EXPECT_LT(winding_number(body.V, body.F, Vector3d(0, 2.0, 0)), 0.01);  // the test itself
@@ -76,7 +76,7 @@ TEST(DefaultCharacterFit, JointsLieInsideTheBody) {
 }
 
 TEST(DefaultCharacterFit, SkeletonHasTheDocumentedJointsAndDofs) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Skeleton& s = skirt().character.skeleton;
   for (const auto& n : kBodyJointNames) EXPECT_GE(s.joint_index(n), 0) << n;
   for (const auto& n : kBodyEndSiteNames) EXPECT_GE(s.joint_index(n), 0) << n;
@@ -109,7 +109,7 @@ TEST(DefaultCharacterFit, SkeletonHasTheDocumentedJointsAndDofs) {
 }
 
 TEST(DefaultCharacterFit, LeftAndRightAreMirrorImages) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = skirt().character;
   for (const auto& n : kBodyJointNames) {
     if (n.rfind("l_", 0) != 0) continue;
@@ -121,7 +121,7 @@ TEST(DefaultCharacterFit, LeftAndRightAreMirrorImages) {
 }
 
 TEST(DefaultCharacterFit, HeightsAndProportionsAreAnatomical) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = skirt().character;
   const double H = skirt().fit.height;
   EXPECT_NEAR(H, 1.66, 1e-9);
@@ -154,7 +154,7 @@ TEST(DefaultCharacterFit, HeightsAndProportionsAreAnatomical) {
 }
 
 TEST(DefaultCharacterFit, Body25KeypointsAreMappedAndPlausible) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = skirt().character;
   const PosedCharacter p = pose_character(ch, ch.rest_dofs);
   ASSERT_TRUE(p.body25.allFinite());
@@ -175,7 +175,7 @@ TEST(DefaultCharacterFit, Body25KeypointsAreMappedAndPlausible) {
 }
 
 TEST(DefaultCharacterFit, SkinningWeightsAreNormalisedAndLocal) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const DefaultCharacter& dc = skirt();
   const Character& ch = dc.character;
   const SkinningWeights& w = ch.body.weights;
@@ -210,7 +210,7 @@ TEST(DefaultCharacterFit, SkinningWeightsAreNormalisedAndLocal) {
 }
 
 TEST(DefaultCharacterGarment, SkirtAndDressClearTheBody) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   for (const DefaultCharacter* dc : {&skirt(), &dress()}) {
     const Character& ch = dc->character;
     ASSERT_TRUE(ch.has_cloth());
@@ -270,7 +270,7 @@ TEST(DefaultCharacterGarment, SkirtAndDressClearTheBody) {
 }
 
 TEST(DefaultCharacterGarment, ArmsAreInactiveAndTheTorsoIsNot) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const DefaultCharacter& dc = skirt();
   const Character& ch = dc.character;
   ASSERT_FALSE(ch.inactive_body_faces.empty());
@@ -290,7 +290,7 @@ TEST(DefaultCharacterGarment, ArmsAreInactiveAndTheTorsoIsNot) {
 }
 
 TEST(DefaultCharacterFolder, WrittenFolderLoadsAndRoundTrips) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const DefaultCharacterConfig cfg = load_default_character_config(repo_file("configs/characters/makehuman_skirt.yaml"));
   const DefaultCharacter& dc = skirt();
   ScratchDir dir("default_character");
@@ -331,7 +331,7 @@ TEST(DefaultCharacterFolder, WrittenFolderLoadsAndRoundTrips) {
 }
 
 TEST(DefaultCharacterFolder, OutputIsDeterministic) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const DefaultCharacterConfig cfg = load_default_character_config(repo_file("configs/characters/makehuman_dress.yaml"));
   ScratchDir dir("default_character_det");
   write_default_character(dress(), cfg, dir.file("a"));

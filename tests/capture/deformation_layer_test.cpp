@@ -8,11 +8,12 @@
 #include "capture/character/skeletool_io.h"
 #include "graph/autograd.h"
 #include "ops/ops.h"
+#include "tests/test_requirements.h"
 
 namespace weft::capture {
 namespace {
 
-const std::string kDdc = std::string(WEFT_SOURCE_DIR) + "/../shared/data/ddc";
+const std::string& kDdc = weft::testing::kDdcDir;
 
 class DeformationLayerDdc : public ::testing::Test {
  protected:
@@ -28,7 +29,7 @@ class DeformationLayerDdc : public ::testing::Test {
     motion_ = nullptr;
   }
   void SetUp() override {
-    if (!character_) GTEST_SKIP() << "ddc data not found at " << kDdc;
+    REQUIRE_DDC_DATA();
   }
   Tensor frames(const std::vector<int>& ids, DType dtype) const {
     const int64_t D = character_->skeleton.num_dofs();

@@ -26,12 +26,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kDdc = WEFT_SOURCE_DIR "/../shared/data/ddc";
+const std::string& kDdc = weft::testing::kDdcDir;
 const std::string kConfig = WEFT_SOURCE_DIR "/configs/characters/ddc_skirt.yaml";
 
-#define REQUIRE_DDC()                                                                  \
-  if (!fs::exists(kDdc + "/ddc.skeleton"))                                             \
-  GTEST_SKIP() << "ddc data not found at " << kDdc << " (see its README); skipping"
+#define REQUIRE_DDC() REQUIRE_DDC_DATA()
 
 // Built once per test program (a few seconds).
 const DefaultCharacterConfig& config() {

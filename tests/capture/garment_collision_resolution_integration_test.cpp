@@ -51,7 +51,7 @@ Vertices pushed_in(const Character& ch) {
 }  // namespace
 
 TEST(GarmentCollisionResolution, PushedInSkirtComesOutOfTheBody) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = coarse_skirt();
   const Vertices cloth = pushed_in(ch);
   const weft::physics::BodyMesh body = body_obstacle(ch, ch.body.mesh.V * ch.metres_per_unit);
@@ -80,7 +80,7 @@ TEST(GarmentCollisionResolution, PushedInSkirtComesOutOfTheBody) {
 }
 
 TEST(GarmentCollisionResolution, CharacterUnitsDoNotChangeTheAnswer) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = coarse_skirt();
   Character mm = ch;  // the same character in millimetres
   mm.metres_per_unit = 0.001 * ch.metres_per_unit;
@@ -96,7 +96,7 @@ TEST(GarmentCollisionResolution, CharacterUnitsDoNotChangeTheAnswer) {
 }
 
 TEST(GarmentCollisionResolution, BadInputIsOneClearError) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Character& ch = coarse_skirt();
   GarmentCollisionResolver resolver(ch, simulation());
   const Vertices& body = ch.body.mesh.V;

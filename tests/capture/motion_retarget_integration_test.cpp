@@ -25,7 +25,7 @@ using weft::capture::testing::expect_error;
 
 namespace {
 
-const std::string kDdc = WEFT_SOURCE_DIR "/../shared/data/ddc";
+const std::string& kDdc = weft::testing::kDdcDir;
 const std::string kDdcConfig = WEFT_SOURCE_DIR "/configs/characters/ddc.yaml";
 const std::string kCmu = "/usr/share/assimp/models/BVH/01_01.bvh";
 const std::string kConfigs = WEFT_SOURCE_DIR "/configs/";
@@ -283,11 +283,9 @@ TEST(Retarget, MappingErrorsNameKeyFileAndLine) {
 
 // ----------------------------------------------------------------- CMU → ddc
 
-#define REQUIRE_DDC_AND_CMU()                                                                      \
-  if (!std::filesystem::exists(kDdc + "/ddc.skeleton"))                                            \
-    GTEST_SKIP() << "ddc data not found at " << kDdc << " (see its README); skipping";             \
-  if (!std::filesystem::exists(kCmu))                                                              \
-  GTEST_SKIP() << "CMU clip not found at " << kCmu << " (Debian package assimp-testmodels); skipping"
+#define REQUIRE_DDC_AND_CMU() \
+  REQUIRE_DDC_DATA();          \
+  REQUIRE_DEBIAN_FILE(kCmu, "assimp-testmodels")
 
 // Lowest body vertex per frame and the largest joint step between frames.
 struct Trajectory {
@@ -415,7 +413,7 @@ TEST(Retarget, CmuWalkOntoDdc) {
 }
 
 TEST(Retarget, ProceduralWalkOntoDdc) {
-  if (!std::filesystem::exists(kDdc + "/ddc.skeleton")) GTEST_SKIP() << "ddc data not found at " << kDdc;
+  REQUIRE_DDC_DATA();
   const Character ch = load_character(kDdcConfig);
   const BvhMotion walk = generate_motion(load_motion_spec(kConfigs + "motions/walk_in_place.yaml"));
   const RetargetMapping mapping = load_retarget_mapping(kConfigs + "retarget/humanoid_to_ddc.yaml");

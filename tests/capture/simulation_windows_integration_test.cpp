@@ -92,7 +92,7 @@ double max_vertex_norm(const Positions& d) {
 // pair (t − 1, t) lands on the ground truth of t + 1 (the dataset's character is read back
 // from its files, so agreement is to the files' rounding, not bitwise).
 TEST(SimulationWindows, GroundTruthReplaysThroughTheWindowSimulator) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const GarmentSequence& s = fixture().sequence;
   for (int t : {2, 5}) {
     const auto w = garment_window(s, t, 1, s.cloth[t - 1], s.cloth[t]);
@@ -106,7 +106,7 @@ TEST(SimulationWindows, GroundTruthReplaysThroughTheWindowSimulator) {
 }
 
 TEST(SimulationWindows, PerturbationIsDeterministicAndBounded) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Fixture& f = fixture();
   const GarmentSequence& s = f.sequence;
   const ClothPerturbationConfig c;
@@ -166,7 +166,7 @@ TEST(SimulationWindows, PerturbationIsDeterministicAndBounded) {
 // non-finite, never an exception; converged windows end with the body at most 1 mm deep
 // in the cloth; the waistband follows its pins.
 TEST(SimulationWindows, PerturbedWindowsEndConvergedOrReportedAndOutOfTheBody) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Fixture& f = fixture();
   const GarmentSequence& s = f.sequence;
   const int frames = 2, count = 10;

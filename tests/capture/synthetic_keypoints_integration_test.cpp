@@ -64,7 +64,7 @@ void expect(const std::array<KeypointVisibility, kBody25Count>& seen, std::initi
 }  // namespace
 
 TEST(SyntheticKeypointsOnTheDefaultCharacter, RigFramesTheWholeBodyInEveryView) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Scene& s = scene();
   for (size_t v = 0; v < s.cameras.size(); ++v) {
     const cv::Rect box = cv::boundingRect(s.renders[v].mask);
@@ -78,7 +78,7 @@ TEST(SyntheticKeypointsOnTheDefaultCharacter, RigFramesTheWholeBodyInEveryView) 
 }
 
 TEST(SyntheticKeypointsOnTheDefaultCharacter, FrontViewSeesEveryMappedKeypoint) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Scene& s = scene();
   const auto seen = seen_by(0);
   for (int k = 0; k < kBody25Count; ++k) {
@@ -88,7 +88,7 @@ TEST(SyntheticKeypointsOnTheDefaultCharacter, FrontViewSeesEveryMappedKeypoint) 
 }
 
 TEST(SyntheticKeypointsOnTheDefaultCharacter, SideViewsHideTheFarSide) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   // cam02 stands at +x, the character's left; cam06 at −x, its right.
   const auto left = seen_by(2), right = seen_by(6);
   expect(left, {"LShoulder", "LElbow", "LWrist", "LHip", "LKnee", "LAnkle"}, KeypointVisibility::visible, "cam02");
@@ -98,7 +98,7 @@ TEST(SyntheticKeypointsOnTheDefaultCharacter, SideViewsHideTheFarSide) {
 }
 
 TEST(SyntheticKeypointsOnTheDefaultCharacter, BackViewHidesTheFaceButNotTheLimbs) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const auto back = seen_by(4);  // azimuth 180: behind the character
   expect(back, {"Nose", "REye", "LEye"}, KeypointVisibility::occluded, "cam04");
   expect(back, {"Neck", "RShoulder", "LShoulder", "RElbow", "LElbow", "RWrist", "LWrist", "RHip", "LHip", "RKnee",
@@ -107,7 +107,7 @@ TEST(SyntheticKeypointsOnTheDefaultCharacter, BackViewHidesTheFaceButNotTheLimbs
 }
 
 TEST(SyntheticKeypointsOnTheDefaultCharacter, NoisyKeypointsStayNearTheTruthWithLowerConfidenceWhenHidden) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Scene& s = scene();
   const KeypointNoiseConfig cfg;
   for (size_t v = 0; v < s.cameras.size(); ++v) {

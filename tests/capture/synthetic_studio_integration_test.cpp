@@ -104,7 +104,7 @@ double iou(const cv::Mat& a, const cv::Mat& b) {
 }  // namespace
 
 TEST(SyntheticStudio, MasksAreTheProjectedGroundTruthSilhouettes) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const std::vector<Camera> cameras = read_cameras_yaml((d.dir / "cameras.yaml").string());
   ASSERT_EQ(static_cast<int>(cameras.size()), 6);
@@ -131,7 +131,7 @@ TEST(SyntheticStudio, MasksAreTheProjectedGroundTruthSilhouettes) {
 }
 
 TEST(SyntheticStudio, PartMasksAndDistanceTransformsAgreeWithTheMask) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const std::string view = "cam03";
   const cv::Mat mask = cv::imread(frame_path(d.dir, "masks", view, 2, ".png"), cv::IMREAD_GRAYSCALE);
@@ -153,7 +153,7 @@ TEST(SyntheticStudio, PartMasksAndDistanceTransformsAgreeWithTheMask) {
 }
 
 TEST(SyntheticStudio, KeypointsReprojectFromTheWrittenPose) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const Character ch = load_character((d.dir / "character" / "character.yaml").string());
   const Motion motion = read_motion((d.dir / "gt" / "pose.motion").string(), ch.skeleton.num_dofs());
@@ -190,7 +190,7 @@ TEST(SyntheticStudio, KeypointsReprojectFromTheWrittenPose) {
 }
 
 TEST(SyntheticStudio, CalibrationRoundTripsAndIsTheConfiguredRig) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const std::vector<Camera> read = read_cameras_yaml((d.dir / "cameras.yaml").string());
   const std::vector<Camera> rig = studio_rig(d.config.cameras.studio);
@@ -210,7 +210,7 @@ TEST(SyntheticStudio, CalibrationRoundTripsAndIsTheConfiguredRig) {
 }
 
 TEST(SyntheticStudio, GarmentStaysOutsideTheBodyAndSplitsAreDisjoint) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const Character ch = load_character((d.dir / "character" / "character.yaml").string());
   std::vector<std::array<int, 3>> faces(ch.body.mesh.num_faces());
@@ -238,7 +238,7 @@ TEST(SyntheticStudio, GarmentStaysOutsideTheBodyAndSplitsAreDisjoint) {
 }
 
 TEST(SyntheticStudio, OneSeedGivesIdenticalFiles) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const fs::path again = scratch_root() / "b";
   fs::remove_all(again);
@@ -259,7 +259,7 @@ TEST(SyntheticStudio, OneSeedGivesIdenticalFiles) {
 // What training reads: the reader opens every split of the written dataset, and each
 // sample's crop camera projects the written pose's keypoints onto the sample's keypoints.
 TEST(SyntheticStudio, TheReaderOpensEverySplitAndCropsAgreeWithTheGroundTruth) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Dataset& d = dataset();
   const DatasetInfo info = read_dataset_info(d.dir.string());
   EXPECT_EQ(info.frames, 4);
@@ -328,7 +328,7 @@ TriangleMesh gt_mesh(const fs::path& dir, const char* kind, int frame) {
 // with continuous frame ids whose second clip is simulated afresh from its own first pose,
 // exactly as if it had been made alone.
 TEST(SyntheticStudio, SeveralClipsMakeOneDatasetWithASimulationPerClip) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   weft::capture::testing::ScratchDir scratch("clips");
   const std::string walk = clip_text("walk_in_place", 1.5), squat = clip_text("squat_jump", 2.2);
   const fs::path both = scratch.file("both"), alone_a = scratch.file("walk"), alone_b = scratch.file("squat");
@@ -419,7 +419,7 @@ TEST(SyntheticStudio, SeveralClipsMakeOneDatasetWithASimulationPerClip) {
 // in_place_s: the walk after the turn travels 0.8 m along x in one second; taking away
 // its path smoothed over 0.5 s walks it on the spot, and changes nothing else.
 TEST(SyntheticStudio, InPlaceTakesAwayTheRootsHorizontalPath) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   weft::capture::testing::ScratchDir scratch("in_place");
   // The garment skinned, not simulated: the motion is what matters here.
   std::unique_ptr<Character> ch;

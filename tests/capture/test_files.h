@@ -8,6 +8,7 @@
 #include <string>
 
 #include "graph/error.h"
+#include "tests/test_requirements.h"
 
 namespace weft::capture::testing {
 
@@ -17,11 +18,8 @@ inline constexpr const char* kHuman = "/usr/share/assimp/models/Collada/human.za
 // A file of the source tree (configs, data), from the test's build definitions.
 inline std::string repo_file(const std::string& rel) { return std::string(WEFT_SOURCE_DIR) + "/" + rel; }
 
-// Skips a test that needs kHuman when the package is not installed.
-#define SKIP_WITHOUT_HUMAN()                                        \
-  if (!std::filesystem::exists(::weft::capture::testing::kHuman))   \
-  GTEST_SKIP() << ::weft::capture::testing::kHuman                  \
-               << " is missing: install Debian's assimp-testmodels (scripts/setup.sh)"
+// Fails a test that needs kHuman when the package is not installed.
+#define REQUIRE_HUMAN() REQUIRE_DEBIAN_FILE(::weft::capture::testing::kHuman, "assimp-testmodels")
 
 // A fresh folder under the system temp dir, removed when the object dies.
 class ScratchDir {

@@ -113,7 +113,7 @@ int64_t run_and_kill(const fs::path& run, int64_t kill_at, bool resume) {
 }  // namespace
 
 TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const Fixture& f = fixture();
   const TrainingConfig cfg = load_training_config(repo_file("configs/train/tiny.yaml"));
   const auto rows = read_loss_log((f.reference / "losses.csv").string());
@@ -144,7 +144,7 @@ TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
 // bit-identical to the uninterrupted run's (losses.csv prints 9 significant digits of each
 // float32 loss; the files are compared whole).
 TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   ASSERT_TRUE(fs::exists(weft_binary())) << weft_binary();
   const Fixture& f = fixture();
   const std::string expected = slurp(f.reference / "losses.csv");
@@ -169,7 +169,7 @@ TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
 }
 
 TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const fs::path data = scratch_root() / "missing_file";
   fs::copy(tiny_data(), data, fs::copy_options::recursive);
   const fs::path gone = data / "keypoints" / "cam03" / "0002_keypoints.json";
@@ -190,7 +190,7 @@ TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
 // that step with an error naming it and the term, and the checkpoint it resumed from is
 // untouched, finite and loadable.
 TEST(Training, ANonFiniteLossStopsTheRunAndNeverReachesACheckpoint) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const fs::path data = scratch_root() / "absurd_keypoints";
   fs::copy(tiny_data(), data, fs::copy_options::recursive);
   TrainOptions o;
@@ -237,7 +237,7 @@ TEST(Training, ANonFiniteLossStopsTheRunAndNeverReachesACheckpoint) {
 // true root rotation and articulation exactly, and the keypoints to the closed-form
 // translation's accuracy from the noisy detections.
 TEST(CaptureModel, ExpressesTheGroundTruthPose) {
-  SKIP_WITHOUT_HUMAN();
+  REQUIRE_HUMAN();
   const fs::path data = tiny_data();
   const DatasetInfo info = read_dataset_info(data.string());
   const Character ch = load_character(info.character);

@@ -42,7 +42,9 @@ void run_parity(const std::string& args) {
   std::printf("%s\n", cmd.c_str());
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status)) << "the parity script did not exit normally";
-  if (WEXITSTATUS(status) == 77) GTEST_SKIP() << "PyTorch/torchvision not importable by " << python();
+  ASSERT_NE(WEXITSTATUS(status), 77) << "PyTorch or torchvision is not importable by " << python()
+                                      << ": install them with scripts/setup.sh (or apt-get install python3-torch "
+                                         "python3-torchvision)";
   EXPECT_EQ(WEXITSTATUS(status), 0) << "weft differs from PyTorch: " << cmd;
 }
 
