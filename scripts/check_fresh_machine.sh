@@ -17,6 +17,7 @@
 # (normal end, failure, Ctrl-C, SIGTERM), and the unpacked root is removed unless --keep.
 # Apt inside the root uses this machine's apt sources and Acquire settings.
 set -euo pipefail
+trap 'echo "check_fresh_machine: failed at line $LINENO: $BASH_COMMAND" >&2' ERR
 
 cache=${WEFT_FRESH_CACHE:-/var/cache/weft-fresh-machine}
 keep=0
@@ -38,14 +39,16 @@ shared=$(cd "$src/.." && pwd)/shared
 [ -d "$shared" ] || { echo "check_fresh_machine: $shared is missing (the tests read ../shared beside the tree)" >&2; exit 2; }
 command -v debootstrap >/dev/null || {
   echo "check_fresh_machine: installing debootstrap"
-  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends debootstrap
+  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends debootstrap; } \
+    >/dev/null
 }
 
 # This machine's Debian mirror, read from its apt sources (deb822 or one-line form).
 mirror=$(
-  { grep -hE '^URIs:' /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '{print $2}';
-    grep -hE '^deb +(\[[^]]*\] +)?[a-z]+://' /etc/apt/sources.list /etc/apt/sources.list.d/*.list 2>/dev/null |
-      sed -E 's/^deb +(\[[^]]*\] +)?//' | awk '{print $1}'; } | grep -v -- '-security' | head -n 1
+  { cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {print $2}';
+    cat /etc/apt/sources.list /etc/apt/sources.list.d/*.list 2>/dev/null |
+      awk '/^deb / { for (i = 2; i <= NF; ++i) if ($i ~ /^[a-z]+:\/\//) { print $i; break } }'; } |
+    grep -v -- '-security' | head -n 1 || true
 )
 [ -n "$mirror" ] || { echo "check_fresh_machine: no Debian mirror found in /etc/apt/sources.list{,.d}" >&2; exit 2; }
 
