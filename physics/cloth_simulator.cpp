@@ -10,6 +10,8 @@ void validate(const SimulationSettings& s) {
   validate(s.material);
   WEFT_CHECK(std::isfinite(s.time_step) && s.time_step > 0, "simulation: time_step must be > 0 s, got ", s.time_step);
   WEFT_CHECK(s.substeps >= 1, "simulation: substeps must be >= 1, got ", s.substeps);
+  WEFT_CHECK(s.max_step_halvings >= 0 && s.max_step_halvings <= 10,
+             "simulation: max_step_halvings must be in [0, 10], got ", s.max_step_halvings);
   WEFT_CHECK(s.gravity.allFinite(), "simulation: gravity must be finite");
   WEFT_CHECK(s.collision_thickness > 0, "simulation: collision thickness must be > 0 m, got ",
              s.collision_thickness);
@@ -25,6 +27,7 @@ void validate(const SimulationSettings& s) {
 ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
     : mesh_(std::move(mesh)), settings_(std::move(settings)) {
   validate(settings_);
+  last_substeps_ = settings_.substeps;
   const int n = mesh_.num_vertices();
   inertia_ = std::make_unique<InertiaEnergy>(mesh_.mass, settings_.time_step);
   gravity_ = std::make_unique<GravityEnergy>(mesh_.mass, settings_.gravity);
@@ -128,7 +131,6 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
              "cloth step: body positions given but the simulator has no body mesh");
   const double h = settings_.time_step;
   const int substeps = settings_.substeps;
-  const double hs = h / substeps;
   StepResult result;
   result.x = x_prev;
   Positions v = (x_prev - x_prev2) / h;
@@ -139,24 +141,38 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
     result.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return result;
   }
-  for (int s = 0; s < substeps; ++s) {
-    if (body_now) {
-      const double t = static_cast<double>(s + 1) / substeps;
-      const Eigen::MatrixX3d now = (1.0 - t) * (*body_prev) + t * (*body_now);
-      // The first sub-step moves the body from body_prev, wherever the mesh was left (its
-      // motion over the sub-step drags the cloth by friction).
-      if (s == 0)
-        bodies_[0]->set_vertices(now, *body_prev);
-      else
-        bodies_[0]->set_vertices(now);
+  const Positions v_start = v;
+  int iterations = 0;
+  for (int halvings = 0;; ++halvings) {
+    const int n = substeps << halvings;
+    const double hs = h / n;
+    result.x = x_prev;
+    result.status = StepStatus::converged;
+    result.substeps = n;
+    v = v_start;
+    for (int s = 0; s < n; ++s) {
+      if (body_now) {
+        const double t = static_cast<double>(s + 1) / n;
+        const Eigen::MatrixX3d now = (1.0 - t) * (*body_prev) + t * (*body_now);
+        // The first sub-step moves the body from body_prev, wherever the mesh was left (its
+        // motion over the sub-step drags the cloth by friction).
+        if (s == 0)
+          bodies_[0]->set_vertices(now, *body_prev);
+        else
+          bodies_[0]->set_vertices(now);
+      }
+      NewtonReport r = advance(result.x, v, hs);
+      iterations += r.iterations;
+      if (static_cast<int>(r.status) > static_cast<int>(result.status)) result.status = r.status;
+      result.gradient_norm = r.gradient_norm;
+      result.energy = r.energy;
+      result.last = std::move(r);
+      if (result.status != StepStatus::converged) break;  // retried below, or reported
     }
-    NewtonReport r = advance(result.x, v, hs);
-    result.newton_iterations += r.iterations;
-    if (static_cast<int>(r.status) > static_cast<int>(result.status)) result.status = r.status;
-    result.gradient_norm = r.gradient_norm;
-    result.energy = r.energy;
-    result.last = std::move(r);
+    if (result.status == StepStatus::converged || halvings >= settings_.max_step_halvings) break;
   }
+  result.newton_iterations = iterations;
+  last_substeps_ = result.substeps;
   result.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
@@ -174,7 +190,7 @@ Positions ClothSimulator::friction_force(const Positions& x_prev, const Position
   // A copy: the simulator's own energy keeps the lag of its last sub-step.
   FrictionEnergy frame = *friction_;
   frame.set_time_step(settings_.time_step);
-  frame.lag(x_prev, settings_.substeps);
+  frame.lag(x_prev, last_substeps_);
   Positions g = Positions::Zero(x.size());
   frame.evaluate(x, &g, nullptr);
   return -g;

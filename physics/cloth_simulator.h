@@ -23,6 +23,12 @@ inline constexpr double kStandardGravity = 9.80665;
 struct SimulationSettings {
   double time_step = 0.01;  // seconds per frame
   int substeps = 1;         // implicit Euler steps per frame
+  // A frame whose Newton solve fails (iteration cap, line search) is rolled back and run
+  // again with twice the sub-steps, up to this many times (h/2, h/4, h/8 at 3): a smaller
+  // step moves the body less per solve and brings the inertia term's stiffness M/h² up,
+  // so the solve is better conditioned. Only then is the frame reported as failed. 0
+  // turns the retries off.
+  int max_step_halvings = 3;
   Vec3 gravity{0.0, -9.81, 0.0};  // m/s²
   ClothMaterial material;
   double collision_thickness = 0.005;  // m
@@ -57,7 +63,8 @@ void validate(const SimulationSettings& settings);
 struct StepResult {
   Positions x;                 // 3n, finite: the last good state if a step failed
   StepStatus status = StepStatus::converged;  // worst over sub-steps
-  int newton_iterations = 0;   // summed over sub-steps
+  int newton_iterations = 0;   // summed over sub-steps and retries
+  int substeps = 1;            // of the attempt returned (settings' substeps × 2^retries)
   double gradient_norm = 0;    // ‖∇E‖∞ after the last sub-step, N
   double energy = 0;           // incremental potential after the last sub-step, J
   double step_ms = 0;
@@ -92,7 +99,8 @@ class ClothSimulator {
 
   // The layer S(x_{t−2}, x_{t−1}, body_{t−1}, body_t) → x_t: the velocity comes from the
   // two previous states, body 0 moves linearly from body_prev to body_now over the
-  // settings' sub-steps (pass null pointers for static obstacles).
+  // settings' sub-steps (pass null pointers for static obstacles). A failed frame is
+  // retried with halved steps (SimulationSettings::max_step_halvings).
   StepResult step(const Positions& x_prev2, const Positions& x_prev,
                   const Eigen::MatrixX3d* body_prev = nullptr,
                   const Eigen::MatrixX3d* body_now = nullptr);
@@ -103,7 +111,8 @@ class ClothSimulator {
   Positions total_force(const Positions& x) const;
   // Friction force (N, 3n) on the cloth at x after a frame that started at x_prev: the
   // friction energy lagged at x_prev over one frame (time_step; the moving body's motion
-  // of the last sub-step times the sub-step count, exact for step()'s linear motion).
+  // of the last sub-step times the last step()'s sub-step count, exact for its linear
+  // motion).
   // With one sub-step this is the friction Newton balanced at the end of that frame.
   Positions friction_force(const Positions& x_prev, const Positions& x) const;
   // Smallest signed distance of a point to any obstacle (m; +inf without obstacles).
@@ -122,6 +131,7 @@ class ClothSimulator {
   std::unique_ptr<FrictionEnergy> friction_;
   std::vector<std::unique_ptr<BodyMesh>> bodies_;
   std::unique_ptr<NewtonSolver> solver_;
+  int last_substeps_ = 1;  // sub-steps of the last step() (friction_force's lag)
 };
 
 }  // namespace weft::physics

@@ -3,6 +3,7 @@
 // per Newton iteration on a compressed cloth.
 #include <gtest/gtest.h>
 
+#include "graph/error.h"
 #include "physics/cloth_metrics.h"
 #include "physics/cloth_simulator.h"
 #include "physics/simulation_window.h"
@@ -201,6 +202,42 @@ TEST(Simulator, BadStartRecoversOrReportsWithoutNaN) {
   EXPECT_NE(r.status, StepStatus::non_finite);
   EXPECT_LT(after.penetrating_vertices, before.penetrating_vertices / 4);
   EXPECT_LT(after.penetration_max, before.penetration_max);
+}
+
+// A frame whose Newton solve hits the iteration cap is rolled back and run again from the
+// same start with halved steps: the result is exactly that of a simulator configured with
+// that many sub-steps, and the iterations of the failed attempts are counted.
+TEST(Simulator, AFailedFrameIsRetriedFromItsStartWithHalvedSteps) {
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.5, 0.5, -0.5), 1.0, 1.0, 10, 10, "xz", 0.2);
+  SimulationSettings s = settings(1.0 / 30);
+  s.collision_thickness = 0.01;
+  s.newton.max_iterations = 10;
+  // Crumpled and falling onto a sphere: no 10-iteration solve of the whole frame.
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 0.04);
+  Positions x = mesh.rest;
+  for (int i = 0; i < x.size(); ++i) x[i] += noise(rng);
+  auto make = [&](int substeps, int halvings) {
+    SimulationSettings t = s;
+    t.substeps = substeps;
+    t.max_step_halvings = halvings;
+    auto sim = std::make_unique<ClothSimulator>(mesh, t);
+    sim->add_body(testing::uv_sphere(Vec3(0, 0.3, 0), 0.25));
+    return sim;
+  };
+  const StepResult once = make(1, 0)->step(x, x);
+  ASSERT_NE(once.status, StepStatus::converged) << "the frame must fail without retries for this test";
+  EXPECT_EQ(once.substeps, 1);
+  const StepResult retried = make(1, 4)->step(x, x);
+  ASSERT_EQ(retried.status, StepStatus::converged);
+  ASSERT_GT(retried.substeps, 1);
+  const StepResult direct = make(retried.substeps, 0)->step(x, x);
+  ASSERT_EQ(direct.status, StepStatus::converged);
+  EXPECT_EQ((retried.x - direct.x).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(retried.newton_iterations, direct.newton_iterations);
+  SimulationSettings bad = s;
+  bad.max_step_halvings = -1;
+  EXPECT_THROW(validate(bad), weft::Error);
 }
 
 TEST(Simulator, NonFiniteInputIsReportedAndNeverReturned) {
