@@ -23,10 +23,17 @@ struct SimulationWindow {
   // pins as configured.
   std::vector<int> pin_vertices;
   std::vector<std::vector<Vec3>> pin_targets;
+  // The silhouette constraint E_cons of each simulated frame (`frames` entries, each the
+  // rays of that frame, m), set before the frame's step. Empty: no rays.
+  std::vector<std::vector<RayTarget>> ray_targets;
   int frames = 1;
+  // Stop at the first step that does not converge: the results then end with that step
+  // (the frames before it converged), instead of carrying on from its last iterate.
+  bool stop_after_failure = false;
 };
 
-// Runs one window on `sim` (its obstacles and pins as configured); one result per frame.
+// Runs one window on `sim` (its obstacles and pins as configured); one result per frame
+// (fewer with stop_after_failure).
 std::vector<StepResult> simulate_window(ClothSimulator& sim, const SimulationWindow& window);
 
 // Makes a configured simulator for one window; called once per window, possibly from

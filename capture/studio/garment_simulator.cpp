@@ -16,7 +16,8 @@ Vertices to_vertices(const physics::Positions& x, double metres_per_unit) {
   return V;
 }
 
-physics::SimulationSettings garment_simulation_settings(const SynthSimulationConfig& s, double fps) {
+physics::SimulationSettings garment_simulation_settings(const SynthSimulationConfig& s, double fps,
+                                                        double ray_stiffness) {
   physics::SimulationSettings settings;
   settings.time_step = 1.0 / fps;
   settings.substeps = s.substeps;
@@ -26,6 +27,7 @@ physics::SimulationSettings garment_simulation_settings(const SynthSimulationCon
   settings.pin_stiffness = s.pin_stiffness;
   settings.newton.max_iterations = s.max_iterations;
   settings.newton.tolerance = s.tolerance;
+  if (ray_stiffness >= 0) settings.constraint_stiffness = ray_stiffness;
   return settings;
 }
 
@@ -40,6 +42,30 @@ std::vector<physics::Vec3> garment_pin_targets(const Character& ch, const Vertic
   return t;
 }
 
+std::vector<physics::Vec3> garment_pin_targets_on_body(const Character& ch, const Vertices& body) {
+  WEFT_CHECK(ch.has_cloth(), ch.source, ": the character has no garment to pin");
+  const Vertices& rest = ch.body.mesh.V;
+  WEFT_CHECK(body.rows() == rest.rows(), "garment pins: ", body.rows(), " body vertices, the character has ",
+             rest.rows());
+  const Attachment& at = ch.attachment;
+  std::vector<physics::Vec3> t;
+  t.reserve(at.size());
+  for (int i = 0; i < at.size(); ++i) {
+    const int a = at.body_vertices(i, 0), b = at.body_vertices(i, 1), c = at.body_vertices(i, 2);
+    auto frame = [&](const Vertices& V) {
+      Eigen::Matrix3d m;
+      m.col(0) = (V.row(b) - V.row(a)).transpose();
+      m.col(1) = (V.row(c) - V.row(a)).transpose();
+      m.col(2) = m.col(0).cross(m.col(1)).normalized();
+      return m;
+    };
+    const Eigen::Vector3d offset = ch.cloth->mesh.V.row(at.anchors(i)).transpose() - rest.row(a).transpose();
+    const Eigen::Vector3d coefficients = frame(rest).colPivHouseholderQr().solve(offset);
+    t.push_back((body.row(a).transpose() + frame(body) * coefficients) * ch.metres_per_unit);
+  }
+  return t;
+}
+
 physics::BodyMesh body_obstacle(const Character& ch, const Eigen::MatrixX3d& body_metres) {
   const Faces& F = ch.body.mesh.F;
   std::vector<std::array<int, 3>> faces(F.rows());
@@ -50,26 +76,29 @@ physics::BodyMesh body_obstacle(const Character& ch, const Eigen::MatrixX3d& bod
 std::unique_ptr<physics::ClothSimulator> make_garment_simulator(const Character& ch,
                                                                 const SynthSimulationConfig& s, double fps,
                                                                 const Eigen::MatrixX3d& body_metres,
-                                                                const std::vector<physics::Vec3>& pin_targets) {
+                                                                const std::vector<physics::Vec3>& pin_targets,
+                                                                double ray_stiffness) {
   WEFT_CHECK(ch.has_cloth(), ch.source, ": the character has no garment to simulate");
   const TriangleMesh& cloth_mesh = ch.cloth->mesh;
   std::vector<std::array<int, 3>> tris(cloth_mesh.num_faces());
   for (int i = 0; i < cloth_mesh.num_faces(); ++i) tris[i] = {cloth_mesh.F(i, 0), cloth_mesh.F(i, 1), cloth_mesh.F(i, 2)};
   auto sim = std::make_unique<physics::ClothSimulator>(
       physics::make_cloth_mesh(to_positions(cloth_mesh.V, ch.metres_per_unit), tris, s.material.density),
-      garment_simulation_settings(s, fps));
+      garment_simulation_settings(s, fps, ray_stiffness));
   sim->add_body(body_obstacle(ch, body_metres), s.friction);
   sim->set_pins(garment_pin_vertices(ch), pin_targets);
   return sim;
 }
 
 physics::SimulatorFactory garment_simulator_factory(const Character& ch, const SynthSimulationConfig& s,
-                                                    double fps) {
+                                                    double fps, double ray_stiffness) {
   WEFT_CHECK(ch.has_cloth(), ch.source, ": the character has no garment to simulate");
   auto character = std::make_shared<const Character>(ch);
   auto body = std::make_shared<const Eigen::MatrixX3d>(ch.body.mesh.V * ch.metres_per_unit);
   auto pins = std::make_shared<const std::vector<physics::Vec3>>(garment_pin_targets(ch, ch.cloth->mesh.V));
-  return [character, s, fps, body, pins]() { return make_garment_simulator(*character, s, fps, *body, *pins); };
+  return [character, s, fps, body, pins, ray_stiffness]() {
+    return make_garment_simulator(*character, s, fps, *body, *pins, ray_stiffness);
+  };
 }
 
 }  // namespace weft::capture

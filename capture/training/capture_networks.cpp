@@ -201,14 +201,18 @@ CapturePrediction predict_batch(CaptureNetworks& nets, const CaptureModel& model
                                 const MultiviewSupervision& sup, Learning learning, bool deformation,
                                 bool with_meshes) {
   const SampleViews placed = batch_views(batch, sup, model);
-  auto run = [&](nn::ResNet& net, bool learns) {
-    net.train(learns);
+  auto run = [&](nn::ResNet& net, bool learns, bool batch_statistics) {
+    net.train(learns && batch_statistics);
     if (learns) return net.forward(batch.images);
     NoGradGuard no_grad;
     return net.forward(batch.images);
   };
-  const Tensor pose_out = run(*nets.pose_net, learning == Learning::pose);
-  const Tensor def_out = deformation ? run(*nets.deformation_net, learning == Learning::deformation) : Tensor();
+  const Tensor pose_out = run(*nets.pose_net, learning == Learning::pose, true);
+  const bool deformation_learns =
+      learning == Learning::deformation || learning == Learning::deformation_frozen_statistics;
+  const Tensor def_out = deformation ? run(*nets.deformation_net, deformation_learns,
+                                           learning == Learning::deformation)
+                                     : Tensor();
   return model.predict(pose_out, def_out, placed, with_meshes);
 }
 

@@ -115,7 +115,10 @@ class CaptureModel {
 namespace weft::capture {
 
 // Which network learns in a forward pass (the other runs in evaluation mode, no graph).
-enum class Learning { none, pose, deformation };
+// deformation_frozen_statistics: PADefNet learns but normalises with its running
+// batch-norm statistics (evaluation-mode normalisation, which it does not update), as in
+// the physics stage, whose batches are windows of near-identical consecutive frames.
+enum class Learning { none, pose, deformation, deformation_frozen_statistics };
 
 // The batch's input views and its frames' detections in every view, for predict().
 SampleViews batch_views(const Batch& batch, const MultiviewSupervision& supervision, const CaptureModel& model);

@@ -23,6 +23,8 @@
 #include "capture/training/loss_log.h"
 #include "capture/training/model_folder.h"
 #include "capture/training/multiview_losses.h"
+#include "capture/training/silhouette_rays.h"
+#include "capture/training/simulation_loss.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
@@ -73,6 +75,20 @@ Faces combined_faces(const Character& ch) {
   Faces f(fb.rows() + fc.rows(), 3);
   f << fb, (fc.array() + int(ch.body.mesh.num_vertices())).matrix();
   return f;
+}
+
+void append_windows(const fs::path& path, int64_t step, const std::vector<SimulationWindowRecord>& records) {
+  const bool fresh = !fs::exists(path);
+  std::ofstream out(path, std::ios::app);
+  if (fresh)
+    out << "step,window,frame,start_max_mm,start_inside,cleaned_inside,cleanup_iterations,status,newton_iterations,"
+           "frames_kept,rays\n";
+  for (size_t w = 0; w < records.size(); ++w) {
+    const SimulationWindowRecord& r = records[w];
+    out << step << ',' << w << ',' << r.frame << ',' << fmt::format("{:.3f}", r.start_max_mm) << ',' << r.start_inside
+        << ',' << r.cleaned_inside << ',' << r.cleanup_iterations << ',' << r.status << ',' << r.newton_iterations
+        << ',' << r.frames_kept << ',' << r.rays << '\n';
+  }
 }
 
 class Trainer {
@@ -129,6 +145,7 @@ class Trainer {
     std::map<std::string, double> terms;
     int windows = 0, failures = 0;
     std::map<std::string, int> failure_statuses;  // the first failed step's status per failed window
+    std::vector<SimulationWindowRecord> window_records;     // this process's windows
   };
   // Averages the gradients of what `opt` steps, and the batch-norm statistics of the
   // network the stage trains, over the shards of every batch and the ranks.
@@ -161,7 +178,7 @@ class Trainer {
     std::vector<int64_t> rows;   // batch rows compared with a simulated state
     std::vector<double> target;  // their simulated states (character units)
   };
-  SimulatedWindows simulate(const CapturePrediction& p, int windows, StepResult& result);
+  SimulatedWindows simulate(const CapturePrediction& p, const Batch& batch, StepResult& result);
   Tensor simulation_term(const CapturePrediction& p, const SimulatedWindows& sims) const;
   void save(int64_t step, const StageConfig& stage, const nn::Optimizer& opt);
 
@@ -178,6 +195,7 @@ class Trainer {
   AttachmentTerms attachment_;
   std::map<int, Vertices> gt_keypoints_;
   physics::SimulatorFactory simulator_;
+  SynthSimulationConfig simulation_settings_;  // the physics stage's garment simulation (material, collisions)
   std::vector<int> window_starts_;  // train frames that start F consecutive train frames
   nn::ProcessGroup& group_ = nn::ProcessGroup::world();
   int shards_ = 1;  // shards per global batch, over all ranks (nn/data_parallel.h)
@@ -185,8 +203,11 @@ class Trainer {
 
 CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool training, PartTimes* times) {
   auto t = Clock::now();
-  const Learning learning =
-      !training ? Learning::none : stage == StageKind::pose ? Learning::pose : Learning::deformation;
+  const Learning learning = !training                  ? Learning::none
+                            : stage == StageKind::pose ? Learning::pose
+                            : stage == StageKind::physics && cfg_.physics.freeze_batch_norm
+                                ? Learning::deformation_frozen_statistics
+                                : Learning::deformation;
   CapturePrediction p = predict_batch(nets_, model_, batch, *supervision_, learning, stage != StageKind::pose,
                                       stage != StageKind::pose);
   if (times) times->lap("networks forward and deformation layer", t);
@@ -281,42 +302,46 @@ void Trainer::check_shards(const StageConfig& s) const {
   }
 }
 
-Trainer::SimulatedWindows Trainer::simulate(const CapturePrediction& p, int windows, StepResult& r) {
+// The windows of L_sim (simulation_loss.h): window w holds batch rows w·F … w·F + F − 1,
+// frames t' … t' + F − 1 of one clip; its converged simulated frames are the targets of
+// rows w·F + 1 ….
+Trainer::SimulatedWindows Trainer::simulate(const CapturePrediction& p, const Batch& batch, StepResult& r) {
   const int F = cfg_.physics.window_frames;
+  const int windows = batch.size() / F;
   const double mpu = character_.metres_per_unit;
   std::vector<physics::SimulationWindow> sims(windows);
-  const std::vector<int> pins = garment_pin_vertices(character_);
-  for (int w = 0; w < windows; ++w) {
-    physics::SimulationWindow& s = sims[w];
-    s.x_prev2 = to_positions(sample_vertices(p.cloth, w * F), mpu);
-    s.x_prev = to_positions(sample_vertices(p.cloth, w * F + 1), mpu);
-    s.frames = F - 2;
-    for (int j = 1; j < F; ++j) s.body.push_back(Eigen::MatrixX3d(sample_vertices(p.body, w * F + j) * mpu));
-    s.pin_vertices = pins;
-    for (int j = 2; j < F; ++j) s.pin_targets.push_back(garment_pin_targets(character_, sample_vertices(p.cloth, w * F + j)));
-  }
+  std::vector<SimulationWindowRecord> records(windows);
+  SilhouetteRayOptions rays;
+  rays.max_pixels = cfg_.physics.ray_max_pixels;
+  rays.metres_per_unit = mpu;
+  tbb::parallel_for(0, windows, [&](int w) {
+    PredictedWindow in;
+    for (int j = 0; j < F; ++j) {
+      in.cloth.push_back(sample_vertices(p.cloth, w * F + j));
+      in.body.push_back(sample_vertices(p.body, w * F + j));
+      if (j > 0 && cfg_.physics.ray_stiffness > 0)
+        in.rays.push_back(silhouette_rays(*supervision_, batch.frames[w * F + j], in.body[j], in.cloth[j], faces_, rays));
+    }
+    records[w].frame = batch.frames[w * F];
+    sims[w] = simulation_loss_window(character_, simulation_settings_, in, cfg_.physics.resolve_start, records[w]);
+  });
   const auto results = physics::simulate_windows(simulator_, sims);
   SimulatedWindows out;
-  std::vector<int64_t>& rows = out.rows;
-  std::vector<double>& target = out.target;
   for (int w = 0; w < windows; ++w) {
-    bool ok = true;
-    for (const physics::StepResult& s : results[w]) ok &= s.status == physics::StepStatus::converged && s.x.allFinite();
+    SimulationWindowRecord& rec = records[w];
+    const std::vector<Vertices> targets = simulation_loss_targets(results[w], mpu, rec);
+    for (size_t j = 0; j < targets.size(); ++j) {
+      out.rows.push_back(w * F + 1 + int64_t(j));
+      const Vertices& V = targets[j];
+      for (int i = 0; i < V.rows(); ++i)
+        for (int k = 0; k < 3; ++k) out.target.push_back(V(i, k));
+    }
     ++r.windows;
-    if (!ok) {
+    if (rec.frames_kept < F - 1) {
       ++r.failures;
-      for (const physics::StepResult& st : results[w])
-        if (st.status != physics::StepStatus::converged) {
-          ++r.failure_statuses[physics::to_string(st.status)];
-          break;
-        }
-      continue;
+      ++r.failure_statuses[rec.status];
     }
-    for (int j = 2; j < F; ++j) {
-      rows.push_back(w * F + j);
-      const physics::Positions& x = results[w][j - 2].x;
-      for (int64_t i = 0; i < x.size(); ++i) target.push_back(x[i] / mpu);
-    }
+    r.window_records.push_back(rec);
   }
   return out;
 }
@@ -359,7 +384,7 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
     const bool simulating = stage.kind == StageKind::physics && stage.weights.simulation > 0;
     std::future<SimulatedWindows> simulated;
     if (simulating)
-      simulated = std::async(std::launch::async, [&] { return simulate(p, batch.size() / cfg_.physics.window_frames, r); });
+      simulated = std::async(std::launch::async, [&] { return simulate(p, batch, r); });
     LandmarkStatistics stats;
     std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
     times.lap("losses", t);
@@ -607,6 +632,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     log = std::make_unique<LossLog>((run / "losses.csv").string(), options_.resume ? done : -1);
     cut_validation(run / "validation.csv", options_.resume ? done : 0);
     if (options_.parameter_checksums) cut_validation(run / "parameters.csv", options_.resume ? done : 0);
+    cut_validation(run / "windows.csv", options_.resume ? done : 0);
   }
   if (shards_ > 1)
     spdlog::info("data parallel: {} ranks, {} shards per global batch ({} per rank), each with its own batch-norm "
@@ -644,7 +670,8 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
         SynthSimulationConfig sim = synth.simulation;
         sim.max_iterations = cfg_.physics.max_iterations;
         sim.tolerance = cfg_.physics.tolerance;
-        simulator_ = garment_simulator_factory(character_, sim, info_.fps);
+        simulator_ = garment_simulator_factory(character_, sim, info_.fps, cfg_.physics.ray_stiffness);
+        simulation_settings_ = sim;
         const std::vector<int>& fr = train_->frames();
         const int F = cfg_.physics.window_frames;
         window_starts_.clear();
@@ -697,6 +724,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     row.terms["lr"] = opt->lr();
     if (log) log->append(row);
     if (options_.parameter_checksums) append_parameter_checksum(run / "parameters.csv", step, nets_, group_);
+    if (group_.is_root() && !r.window_records.empty()) append_windows(run / "windows.csv", step, r.window_records);
     if (progress && group_.is_root()) progress({step, total, row.stage, r.terms});
     if (step % cfg_.log_every == 0 || step == last_step) {
       std::string msg;

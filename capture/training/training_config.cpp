@@ -115,9 +115,15 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   if (c.total_steps() == 0) y.fail_at(st, "stages", "every stage has 0 steps: nothing to train");
   if (const YAML::Node n = root["physics"]) {
     PhysicsConfig& p = c.physics;
-    y.numbers(n, "physics.", {{"tolerance", &p.tolerance, 1e-8, 10}},
-              {{"window_frames", &p.window_frames, 3, 64}, {"max_iterations", &p.max_iterations, 1, 10000}},
-              {"synth_config"});
+    y.numbers(n, "physics.",
+              {{"tolerance", &p.tolerance, 1e-8, 10},
+               {"ray_stiffness", &p.ray_stiffness, 0, 1e8},
+               {"ray_max_pixels", &p.ray_max_pixels, 0, 1e4}},
+              {{"window_frames", &p.window_frames, 2, 64}, {"max_iterations", &p.max_iterations, 1, 10000}},
+              {"synth_config", "resolve_start", "freeze_batch_norm"});
+    if (n["resolve_start"]) p.resolve_start = y.get<bool>(n["resolve_start"], "physics.resolve_start", "true or false");
+    if (n["freeze_batch_norm"])
+      p.freeze_batch_norm = y.get<bool>(n["freeze_batch_norm"], "physics.freeze_batch_norm", "true or false");
     if (n["synth_config"]) p.synth_config = y.path(n["synth_config"], "physics.synth_config");
   }
   const StageConfig& physics = c.stages[2];

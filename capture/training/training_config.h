@@ -45,11 +45,24 @@ struct NetworkConfig {
   double translation_scale_m = 0.01;  // PADefNet: node translation = this · output (metres)
 };
 
+// The simulation loss L_sim (the paper's Eq. 8): a window of F consecutive predicted frames
+// t' … t'+F−1 starts the simulator at the prediction of t' (cleared of penetration first)
+// with the forward-difference velocity to t'+1, simulates t'+1 … t'+F−1 following the
+// predicted bodies, with the silhouette constraint E_cons from each frame's views, and
+// pulls each of those predictions toward its simulated state.
 struct PhysicsConfig {
   std::string synth_config;  // the synth config whose `simulation` section sets the simulator
-  int window_frames = 3;     // consecutive frames per window: the first two start the simulator
+  int window_frames = 4;     // F: the first frame starts the simulator, the other F − 1 get targets
   int max_iterations = 30;   // Newton iterations per step in training windows
   double tolerance = 1e-2;   // looser than ground truth's 1e-3 (relative to a vertex's weight)
+  // E_cons: stiffness (N/m) pulling each garment vertex on the predicted silhouette toward
+  // the camera ray through the nearest mask contour pixel, in every view; 0 switches it off.
+  double ray_stiffness = 100;
+  // A boundary vertex whose projection lies farther than this from the mask's contour
+  // (pixels at silhouette_size) gets no ray: its nearest contour pixel is not its own.
+  double ray_max_pixels = 6;
+  bool resolve_start = true;      // the collision-resolution pass on each window's start state
+  bool freeze_batch_norm = true;  // PADefNet normalises with its running statistics in this stage
 };
 
 struct TrainingConfig {

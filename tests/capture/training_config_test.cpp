@@ -65,8 +65,17 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error([] { parse_training_config("stages:\n  physics: {steps: 4, simulation: 1}\n", "c.yaml"); },
                {"c.yaml", "physics.synth_config", "missing"});
   expect_error(
-      [] { parse_training_config(std::string(kStages) + "physics: {window_frames: 2, synth_config: x}\n", "c.yaml"); },
+      [] { parse_training_config(std::string(kStages) + "physics: {window_frames: 1, synth_config: x}\n", "c.yaml"); },
       {"c.yaml", "physics.window_frames"});
+  expect_error(
+      [] { parse_training_config(std::string(kStages) + "physics: {resolve_start: maybe, synth_config: x}\n", "c.yaml"); },
+      {"c.yaml", "physics.resolve_start", "true or false"});
+  expect_error(
+      [] { parse_training_config(std::string(kStages) + "physics: {ray_stiffness: -1, synth_config: x}\n", "c.yaml"); },
+      {"c.yaml", "physics.ray_stiffness"});
+  expect_error(
+      [] { parse_training_config(std::string(kStages) + "physics: {freeze_batchnorm: true, synth_config: x}\n", "c.yaml"); },
+      {"c.yaml", "freeze_batchnorm"});
   expect_error([] { parse_training_config("stages:\n  warmup: {steps: 4, silhouette: 1, cloth_arap: 2}\n", "c.yaml"); },
                {"c.yaml:2", "stages.warmup.cloth_arap", "arap > 0"});
   expect_error([] { load_training_config("/nonexistent/train.yaml"); }, {"/nonexistent/train.yaml", "cannot open"});

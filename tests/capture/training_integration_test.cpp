@@ -133,6 +133,28 @@ TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
   bool simulated = false;
   for (const LossRow& r : rows) simulated |= r.terms.count("simulation") > 0;
   EXPECT_TRUE(simulated) << "no step of the physics stage had a converged window";
+  // Every window is in windows.csv with its start's penetration, status and Newton
+  // iterations; the silhouette constraint had rays, and converged windows kept all F − 1
+  // simulated frames as targets.
+  std::istringstream windows(slurp(f.reference / "windows.csv"));
+  std::string line;
+  std::getline(windows, line);
+  EXPECT_EQ(line, "step,window,frame,start_max_mm,start_inside,cleaned_inside,cleanup_iterations,status,"
+                  "newton_iterations,frames_kept,rays");
+  int logged = 0, with_rays = 0;
+  while (std::getline(windows, line)) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string v; std::getline(ss, v, ',');) c.push_back(v);
+    ASSERT_EQ(c.size(), 11u) << line;
+    ++logged;
+    with_rays += std::stoi(c[10]) > 0;
+    EXPECT_GT(std::stoi(c[8]), 0) << line;
+    if (c[7] == "converged") EXPECT_EQ(std::stoi(c[9]), cfg.physics.window_frames - 1) << line;
+    else EXPECT_LT(std::stoi(c[9]), cfg.physics.window_frames - 1) << line;
+  }
+  EXPECT_EQ(logged, f.simulation_windows);
+  EXPECT_GT(with_rays, 0);
   for (const char* file : {"losses.csv", "losses.png", "validation.csv", "config.yaml", "model.safetensors"})
     EXPECT_TRUE(fs::exists(f.reference / file)) << file;
   EXPECT_GE(f.validation_iou, 0.0);
