@@ -149,43 +149,72 @@ CapturePrediction CaptureModel::predict(const Tensor& pose_output, const Tensor&
   const PosedJoints joints = layer_.pose(p.dofs);
   Tensor keypoints = layer_.body25(joints);
 
-  Tensor body_angles, body_translations, cloth_angles, cloth_translations;
-  if (deformation_output.defined()) {
-    WEFT_CHECK(deformation_output.dim() == 2 && deformation_output.size(0) == B &&
-                   deformation_output.size(1) == deformation_outputs(),
-               "CaptureModel: PADefNet output ", shape_str(deformation_output.shape()), ", expected [", B, ", ",
-               deformation_outputs(), "]");
-    const double to_units = config_.translation_scale_m / character_.metres_per_unit;
-    int64_t at = 0;
-    auto take = [&](int64_t k, double s) {
-      Tensor t = ops::scale(ops::reshape(ops::slice(deformation_output, 1, at, at + 3 * k), {B, k, 3}), s);
-      at += 3 * k;
-      return t;
-    };
-    const int64_t kb = layer_.body().num_nodes();
-    body_angles = take(kb, config_.angle_scale);
-    body_translations = take(kb, to_units);
-    p.body_rotations = ops::euler_to_rotation(body_angles);
-    p.body_translations = body_translations;
-    if (layer_.cloth()) {
-      const int64_t kc = layer_.cloth()->num_nodes();
-      cloth_angles = take(kc, config_.angle_scale);
-      cloth_translations = take(kc, to_units);
-      p.cloth_rotations = ops::euler_to_rotation(cloth_angles);
-      p.cloth_translations = cloth_translations;
-    }
-    // The keypoints move with the body's graph (as DeepCap's markers ride on the template).
-    keypoints = ops::add(keypoints, ops::sub(layer_.deform(landmarks_, joints, body_angles, body_translations),
+  const GraphMotion g = graph_motion(deformation_output, B, p);
+  // The keypoints move with the body's graph (as DeepCap's markers ride on the template).
+  if (deformation_output.defined())
+    keypoints = ops::add(keypoints, ops::sub(layer_.deform(landmarks_, joints, g.body_angles, g.body_translations),
                                              layer_.deform(landmarks_, joints, Tensor(), Tensor())));
-  }
   const Tensor oriented = ops::matmul(ops::sub(keypoints, pivot_), rotation_t);
   p.translation = solve_root_translation(views.translation, oriented);
   p.keypoints = ops::add(oriented, ops::reshape(p.translation, {B, 1, 3}));
   if (!with_meshes) return p;
-  p.body = to_world(layer_.deform(layer_.body(), joints, body_angles, body_translations), rotation_t, p.translation);
+  p.body = to_world(layer_.deform(layer_.body(), joints, g.body_angles, g.body_translations), rotation_t, p.translation);
   if (layer_.cloth())
-    p.cloth = to_world(layer_.deform(*layer_.cloth(), joints, cloth_angles, cloth_translations), rotation_t,
+    p.cloth = to_world(layer_.deform(*layer_.cloth(), joints, g.cloth_angles, g.cloth_translations), rotation_t,
                        p.translation);
+  return p;
+}
+
+CaptureModel::GraphMotion CaptureModel::graph_motion(const Tensor& deformation_output, int64_t B,
+                                                     CapturePrediction& p) const {
+  GraphMotion g;
+  if (!deformation_output.defined()) return g;
+  WEFT_CHECK(deformation_output.dim() == 2 && deformation_output.size(0) == B &&
+                 deformation_output.size(1) == deformation_outputs(),
+             "CaptureModel: PADefNet output ", shape_str(deformation_output.shape()), ", expected [", B, ", ",
+             deformation_outputs(), "]");
+  const double to_units = config_.translation_scale_m / character_.metres_per_unit;
+  int64_t at = 0;
+  auto take = [&](int64_t k, double s) {
+    Tensor t = ops::scale(ops::reshape(ops::slice(deformation_output, 1, at, at + 3 * k), {B, k, 3}), s);
+    at += 3 * k;
+    return t;
+  };
+  const int64_t kb = layer_.body().num_nodes();
+  g.body_angles = take(kb, config_.angle_scale);
+  g.body_translations = take(kb, to_units);
+  p.body_rotations = ops::euler_to_rotation(g.body_angles);
+  p.body_translations = g.body_translations;
+  if (layer_.cloth()) {
+    const int64_t kc = layer_.cloth()->num_nodes();
+    g.cloth_angles = take(kc, config_.angle_scale);
+    g.cloth_translations = take(kc, to_units);
+    p.cloth_rotations = ops::euler_to_rotation(g.cloth_angles);
+    p.cloth_translations = g.cloth_translations;
+  }
+  return g;
+}
+
+CapturePrediction CaptureModel::predict_posed(const Tensor& dofs, const Tensor& deformation_output,
+                                              bool with_meshes) const {
+  const int64_t B = dofs.size(0), D = int64_t(character_.rest_dofs.size());
+  WEFT_CHECK(dofs.dim() == 2 && dofs.size(1) == D, "CaptureModel: given dofs ", shape_str(dofs.shape()),
+             ", expected [B, ", D, "]");
+  CapturePrediction p;
+  p.dofs = dofs;
+  std::vector<double> eye(B * 9, 0.0);
+  for (int64_t b = 0; b < B; ++b) eye[b * 9] = eye[b * 9 + 4] = eye[b * 9 + 8] = 1;
+  p.rotation = Tensor::from_data({B, 3, 3}, eye, dofs.dtype());
+  p.translation = Tensor::from_data({B, 3}, std::vector<double>(B * 3, 0.0), dofs.dtype());
+  const PosedJoints joints = layer_.pose(dofs);
+  p.keypoints = layer_.body25(joints);
+  const GraphMotion g = graph_motion(deformation_output, B, p);
+  if (deformation_output.defined())
+    p.keypoints = ops::add(p.keypoints, ops::sub(layer_.deform(landmarks_, joints, g.body_angles, g.body_translations),
+                                                 layer_.deform(landmarks_, joints, Tensor(), Tensor())));
+  if (!with_meshes) return p;
+  p.body = layer_.deform(layer_.body(), joints, g.body_angles, g.body_translations);
+  if (layer_.cloth()) p.cloth = layer_.deform(*layer_.cloth(), joints, g.cloth_angles, g.cloth_translations);
   return p;
 }
 
@@ -199,21 +228,21 @@ SampleViews batch_views(const Batch& batch, const MultiviewSupervision& sup, con
 
 CapturePrediction predict_batch(CaptureNetworks& nets, const CaptureModel& model, const Batch& batch,
                                 const MultiviewSupervision& sup, Learning learning, bool deformation,
-                                bool with_meshes) {
-  const SampleViews placed = batch_views(batch, sup, model);
+                                bool with_meshes, const Tensor& oracle_dofs) {
   auto run = [&](nn::ResNet& net, bool learns, bool batch_statistics) {
     net.train(learns && batch_statistics);
     if (learns) return net.forward(batch.images);
     NoGradGuard no_grad;
     return net.forward(batch.images);
   };
-  const Tensor pose_out = run(*nets.pose_net, learning == Learning::pose, true);
   const bool deformation_learns =
       learning == Learning::deformation || learning == Learning::deformation_frozen_statistics;
   const Tensor def_out = deformation ? run(*nets.deformation_net, deformation_learns,
                                            learning == Learning::deformation)
                                      : Tensor();
-  return model.predict(pose_out, def_out, placed, with_meshes);
+  if (oracle_dofs.defined()) return model.predict_posed(oracle_dofs, def_out, with_meshes);
+  const Tensor pose_out = run(*nets.pose_net, learning == Learning::pose, true);
+  return model.predict(pose_out, def_out, batch_views(batch, sup, model), with_meshes);
 }
 
 }  // namespace weft::capture

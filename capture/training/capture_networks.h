@@ -93,8 +93,20 @@ class CaptureModel {
   // nearest to it in the bind pose, so L_lm reaches PADefNet while PoseNet is frozen.
   CapturePrediction predict(const Tensor& pose_output, const Tensor& deformation_output,
                             const SampleViews& views, bool with_meshes = true) const;
+  // The same from given dofs [B, D] of the whole skeleton, root chain included (the
+  // skeleton posed in the world, e.g. a dataset's gt/pose.motion), instead of PoseNet's
+  // output and the root translation solve: the oracle pose of the physics experiment,
+  // which isolates the garment from pose error. rotation is the identity, translation 0.
+  CapturePrediction predict_posed(const Tensor& dofs, const Tensor& deformation_output,
+                                  bool with_meshes = true) const;
 
  private:
+  // PADefNet's output [B, deformation_outputs()] as graph angles (radians) and
+  // translations (character units); fills p's graph rotations and translations.
+  struct GraphMotion {
+    Tensor body_angles, body_translations, cloth_angles, cloth_translations;
+  };
+  GraphMotion graph_motion(const Tensor& deformation_output, int64_t B, CapturePrediction& p) const;
   Tensor to_world(const Tensor& points, const Tensor& rotation_t, const Tensor& translation) const;
 
   const Character& character_;
@@ -125,9 +137,10 @@ SampleViews batch_views(const Batch& batch, const MultiviewSupervision& supervis
 
 // Both networks on a batch, placed in the world by the frames' detections in every view:
 // PoseNet always; PADefNet unless `deformation` is false (then the skinned template).
-// with_meshes: see CaptureModel::predict.
+// with_meshes: see CaptureModel::predict. oracle_dofs ([B, D], defined): the skeleton is
+// posed by these instead of PoseNet (CaptureModel::predict_posed), which then does not run.
 CapturePrediction predict_batch(CaptureNetworks& networks, const CaptureModel& model, const Batch& batch,
                                 const MultiviewSupervision& supervision, Learning learning, bool deformation,
-                                bool with_meshes = true);
+                                bool with_meshes = true, const Tensor& oracle_dofs = Tensor());
 
 }  // namespace weft::capture

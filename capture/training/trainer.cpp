@@ -120,10 +120,19 @@ class Trainer {
     }
     const fs::path gt = fs::path(options.data) / "gt" / "pose.motion";
     if (fs::exists(gt)) {
-      const Motion motion = read_motion(gt.string(), int(character_.rest_dofs.size()));
+      gt_motion_ = read_motion(gt.string(), int(character_.rest_dofs.size()));
       for (int f : frames)
-        if (f < motion.num_frames())
-          gt_keypoints_[f] = pose_character(character_, motion.dofs.row(f).transpose()).body25;
+        if (f < gt_motion_.num_frames())
+          gt_keypoints_[f] = pose_character(character_, gt_motion_.dofs.row(f).transpose()).body25;
+    }
+    if (cfg_.oracle_pose) {
+      WEFT_CHECK(fs::exists(gt), cfg_.file, ": oracle_pose poses the character by the ground truth, but ", gt.string(),
+                 " does not exist (a dataset of `weft synth` has it)");
+      for (int f : frames)
+        WEFT_CHECK(f < gt_motion_.num_frames(), gt.string(), ": ", gt_motion_.num_frames(),
+                   " frames, but the dataset uses frame ", f, " (oracle_pose)");
+      spdlog::info("oracle pose: the warm start, the physics stage and validation pose the character by {}",
+                   gt.string());
     }
     spdlog::info("data: {} ({} train frames, {} val, {} views, {}×{}); character {}: {} body + {} cloth vertices, "
                  "{} + {} graph nodes, {} regressed dofs",
@@ -194,6 +203,16 @@ class Trainer {
   ArapTerms body_arap_, cloth_arap_;
   AttachmentTerms attachment_;
   std::map<int, Vertices> gt_keypoints_;
+  Motion gt_motion_;  // gt/pose.motion (empty without one)
+  // The ground truth's dofs of the batch's frames [B, D] (config oracle_pose).
+  Tensor oracle_dofs(const Batch& batch) const {
+    const int64_t D = gt_motion_.dofs.cols();
+    std::vector<double> d;
+    d.reserve(batch.frames.size() * D);
+    for (int f : batch.frames)
+      for (int64_t k = 0; k < D; ++k) d.push_back(gt_motion_.dofs(f, k));
+    return Tensor::from_data({int64_t(batch.frames.size()), D}, d, DType::F32);
+  }
   physics::SimulatorFactory simulator_;
   SynthSimulationConfig simulation_settings_;  // the physics stage's garment simulation (material, collisions)
   std::vector<int> window_starts_;  // train frames that start F consecutive train frames
@@ -208,8 +227,9 @@ CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool tra
                             : stage == StageKind::physics && cfg_.physics.freeze_batch_norm
                                 ? Learning::deformation_frozen_statistics
                                 : Learning::deformation;
+  const bool oracle = cfg_.oracle_pose && stage != StageKind::pose;
   CapturePrediction p = predict_batch(nets_, model_, batch, *supervision_, learning, stage != StageKind::pose,
-                                      stage != StageKind::pose);
+                                      stage != StageKind::pose, oracle ? oracle_dofs(batch) : Tensor());
   if (times) times->lap("networks forward and deformation layer", t);
   return p;
 }

@@ -82,6 +82,11 @@ struct TrainingConfig {
   // over the ranks (a multiple of their number); 0: one shard per rank. A fixed value
   // makes the run the same computation on any number of ranks that divides it.
   int shards = 0;
+  // The warm start and the physics stage (and validation) pose the character by the
+  // dataset's ground truth, gt/pose.motion, instead of PoseNet: the oracle pose, which
+  // isolates what the deformation stages do to the garment from pose error (the paper
+  // assumes PoseNet fixed in its section 3.3.2). The pose stage is then not needed.
+  bool oracle_pose = false;
   PhysicsConfig physics;
 
   int total_steps() const;

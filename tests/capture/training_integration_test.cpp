@@ -190,6 +190,66 @@ TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
   EXPECT_EQ(slurp(run / "losses.csv"), expected);
 }
 
+// oracle_pose: the deformation stages pose the character by gt/pose.motion, so the
+// validated joints are the ground truth's (PoseNet is never trained), the physics stage
+// runs its windows on the true bodies; without gt/pose.motion it is one clear error.
+TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
+  REQUIRE_HUMAN();
+  const fs::path dir = scratch_root() / "oracle";
+  fs::create_directories(dir);
+  const fs::path config = dir / "oracle.yaml";
+  std::ofstream(config) << "seed: 3\noracle_pose: true\nnetwork: {backbone: resnet18, input_size: 64}\n"
+                           "stages:\n  warmup: {steps: 3, batch_size: 4, lr: 1.0e-3, landmarks: 1, silhouette: 1, "
+                           "arap: 10, attachment: 10}\n  physics: {steps: 2, batch_size: 6, lr: 5.0e-4, landmarks: 1, "
+                           "silhouette: 1, simulation: 1, attachment: 10}\n"
+                           "physics: {synth_config: "
+                        << repo_file("configs/synth/tiny.yaml")
+                        << ", window_frames: 3, max_iterations: 60, tolerance: 1.0e-2}\n"
+                           "silhouette_size: 64\nloader_threads: 0\nvalidate_every: 0\nvalidation_samples: 8\n";
+  TrainOptions o;
+  o.config = config.string();
+  o.data = tiny_data().string();
+  o.run = (dir / "run").string();
+  const TrainSummary summary = train(o);
+  EXPECT_GT(summary.simulation_windows, 0);
+  std::istringstream validation(slurp(dir / "run" / "validation.csv"));
+  std::string header, row;
+  std::getline(validation, header);
+  ASSERT_TRUE(std::getline(validation, row)) << "no validation row";
+  std::vector<std::string> c;
+  std::stringstream ss(row);
+  for (std::string v; std::getline(ss, v, ',');) c.push_back(v);
+  ASSERT_GE(c.size(), 4u) << row;
+  // Only PADefNet's graph moves the keypoints off the ground truth's (by millimetres after
+  // 5 steps; an untrained PoseNet is hundreds of millimetres off).
+  EXPECT_LT(std::stod(c[3]), 20.0) << "joint error (mm) under the oracle pose: " << row;
+
+  // Without PADefNet the oracle prediction is the ground truth's posed template.
+  const DatasetInfo info = read_dataset_info(tiny_data().string());
+  const Character ch = load_character(info.character);
+  const CaptureModel model(ch, NetworkConfig{});
+  const Motion gt = read_motion((tiny_data() / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
+  const int64_t D = gt.dofs.cols();
+  std::vector<double> d;
+  for (int f = 0; f < 2; ++f)
+    for (int64_t k = 0; k < D; ++k) d.push_back(gt.dofs(f, k));
+  const CapturePrediction p =
+      model.predict_posed(weft::Tensor::from_data({2, D}, d, weft::DType::F32), weft::Tensor());
+  const double mm = 1e-3 / ch.metres_per_unit;  // float32 posing: within a millimetre
+  for (int f = 0; f < 2; ++f) {
+    const PosedCharacter posed = pose_character(ch, gt.dofs.row(f).transpose());
+    EXPECT_LT((sample_vertices(p.body, f) - posed.body).cwiseAbs().maxCoeff(), mm) << "frame " << f;
+    EXPECT_LT((sample_vertices(p.cloth, f) - posed.cloth).cwiseAbs().maxCoeff(), mm) << "frame " << f;
+  }
+
+  const fs::path no_gt = dir / "no_gt";
+  fs::copy(tiny_data(), no_gt, fs::copy_options::recursive);
+  fs::remove(no_gt / "gt" / "pose.motion");
+  o.data = no_gt.string();
+  o.run = (dir / "run_no_gt").string();
+  weft::capture::testing::expect_error([&] { train(o); }, {"oracle_pose", "pose.motion", "does not exist"});
+}
+
 TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
   REQUIRE_HUMAN();
   const fs::path data = scratch_root() / "missing_file";
