@@ -13,47 +13,26 @@
 #include "capture/studio/garment_collision_resolution.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
+#include "tests/capture/coarse_skirt.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
+using weft::capture::testing::coarse_skirt;
 using weft::capture::testing::repo_file;
+using weft::capture::testing::skirt_pushed_into_body;
 
 namespace {
 
-// Built once per test program (a few seconds).
-const Character& coarse_skirt() {
-  static std::unique_ptr<Character> ch;
-  if (!ch)
-    ch = std::make_unique<Character>(
-        make_default_character(
-            load_default_character_config(repo_file("configs/characters/makehuman_skirt_coarse.yaml")))
-            .character);
-  return *ch;
-}
 
 SynthSimulationConfig simulation() { return SynthSimulationConfig{}; }  // the synth's defaults (training.yaml's values)
 
-// The bind-pose skirt with 3 patches pushed 2 cm into the body (perturb_start's patches
-// only: no stretch, no displacement), character units.
-Vertices pushed_in(const Character& ch) {
-  const double mpu = ch.metres_per_unit;
-  const weft::physics::Positions x = to_positions(ch.cloth->mesh.V, mpu);
-  ClothPerturbationConfig c;
-  c.max_stretch = 0;
-  c.max_displacement_m = 0;
-  c.patches = 3;
-  c.velocity_noise_smooth_mps = 0;
-  c.velocity_noise_vertex_mps = 0;
-  const weft::physics::BodyMesh body = body_obstacle(ch, ch.body.mesh.V * mpu);
-  return to_vertices(perturb_start(x, x, x, body, 1.0 / 30, c, 7).x_prev, mpu);
-}
 
 }  // namespace
 
 TEST(GarmentCollisionResolution, PushedInSkirtComesOutOfTheBody) {
   REQUIRE_HUMAN();
   const Character& ch = coarse_skirt();
-  const Vertices cloth = pushed_in(ch);
+  const Vertices cloth = skirt_pushed_into_body(ch);
   const weft::physics::BodyMesh body = body_obstacle(ch, ch.body.mesh.V * ch.metres_per_unit);
   const Penetration before = body_penetration(body, to_positions(cloth, ch.metres_per_unit));
   ASSERT_GT(before.max_depth, 0.01);
@@ -86,7 +65,7 @@ TEST(GarmentCollisionResolution, CharacterUnitsDoNotChangeTheAnswer) {
   mm.metres_per_unit = 0.001 * ch.metres_per_unit;
   mm.body.mesh.V *= 1000;
   mm.cloth->mesh.V *= 1000;
-  const Vertices cloth = pushed_in(ch);
+  const Vertices cloth = skirt_pushed_into_body(ch);
   const GarmentCollisionResolution in_m = resolve_garment_collisions(ch, simulation(), ch.body.mesh.V, cloth);
   const GarmentCollisionResolution in_mm =
       resolve_garment_collisions(mm, simulation(), mm.body.mesh.V, Vertices(cloth * 1000));

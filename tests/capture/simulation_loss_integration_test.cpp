@@ -14,22 +14,16 @@
 #include "capture/studio/garment_windows.h"
 #include "capture/training/silhouette_rays.h"
 #include "capture/training/simulation_loss.h"
+#include "tests/capture/coarse_skirt.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
+using weft::capture::testing::coarse_skirt;
 using weft::capture::testing::repo_file;
+using weft::capture::testing::skirt_pushed_into_body;
 
 namespace {
 
-const Character& coarse_skirt() {
-  static std::unique_ptr<Character> ch;
-  if (!ch)
-    ch = std::make_unique<Character>(
-        make_default_character(
-            load_default_character_config(repo_file("configs/characters/makehuman_skirt_coarse.yaml")))
-            .character);
-  return *ch;
-}
 
 // The training windows' simulator: the synth's garment with the default training config's Newton settings.
 SynthSimulationConfig training_simulation() {
@@ -46,18 +40,6 @@ double inside_fraction(const Character& ch, const Vertices& cloth) {
          cloth.rows();
 }
 
-// The bind-pose skirt with 3 patches pushed 2 cm into the body.
-Vertices pushed_in(const Character& ch) {
-  const double mpu = ch.metres_per_unit;
-  const weft::physics::Positions x = to_positions(ch.cloth->mesh.V, mpu);
-  ClothPerturbationConfig c;
-  c.max_stretch = 0;
-  c.max_displacement_m = 0;
-  c.patches = 3;
-  c.velocity_noise_smooth_mps = 0;
-  c.velocity_noise_vertex_mps = 0;
-  return to_vertices(perturb_start(x, x, x, rest_body(ch), 1.0 / 30, c, 7).x_prev, mpu);
-}
 
 // The bind-pose skirt drawn toward the body's vertical axis (anchors kept) until at least
 // `fraction` of its vertices are inside the body.
@@ -98,7 +80,7 @@ std::vector<weft::physics::StepResult> run(const Character& ch, const weft::phys
 TEST(SimulationLoss, TargetOfAClothInsideTheBodyLiesOutsideIt) {
   REQUIRE_HUMAN();
   const Character& ch = coarse_skirt();
-  const Vertices cloth = pushed_in(ch);
+  const Vertices cloth = skirt_pushed_into_body(ch);
   const double mpu = ch.metres_per_unit;
   const Penetration before = body_penetration(rest_body(ch), to_positions(cloth, mpu));
   ASSERT_GT(before.max_depth, 0.01);
