@@ -40,19 +40,15 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
   }
   WEFT_CHECK(x.size() == 3 * n && x_prev.size() == x.size() && x_prev2.size() == x.size(),
              "metrics: frames must have ", 3 * n, " entries");
-  WEFT_CHECK(h > 0, "metrics: time step must be > 0 s, got ", h);
-  const Positions f = sim.total_force(x) + sim.friction_force(x_prev, x);
-  const Positions a = (x - 2.0 * x_prev + x_prev2) / (h * h);
-  const double g = sim.settings().gravity.norm();
+  const VertexBalance b = vertex_balance(sim, x_prev2, x_prev, x, h);
   double sum = 0, sum_rel = 0;
   int counted = 0;
   m.oob_force_max = m.oob_force_max_rel = 0;
   for (int i = 0; i < n; ++i) {
     if (skip[i]) continue;
     ++counted;
-    const double mass = sim.mesh().mass[i];
-    const double r = (mass * a.segment<3>(3 * i) - f.segment<3>(3 * i)).norm();
-    const double rel = g > 0 ? r / (mass * g) : 0.0;
+    const double r = b.residual[i];
+    const double rel = b.weight[i] > 0 ? r / b.weight[i] : 0.0;
     sum += r;
     sum_rel += rel;
     m.oob_force_max = std::max(m.oob_force_max, r);
@@ -60,6 +56,35 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
   }
   m.oob_force_mean = counted ? sum / counted : 0.0;
   m.oob_force_mean_rel = counted ? sum_rel / counted : 0.0;
+}
+
+VertexBalance vertex_balance(const ClothSimulator& sim, const Positions& x_prev2, const Positions& x_prev,
+                             const Positions& x, double h) {
+  const int n = sim.mesh().num_vertices();
+  WEFT_CHECK(x.size() == 3 * n && x_prev.size() == x.size() && x_prev2.size() == x.size(),
+             "metrics: frames must have ", 3 * n, " entries");
+  WEFT_CHECK(h > 0, "metrics: time step must be > 0 s, got ", h);
+  const ClothSimulator::ForceParts f = sim.force_parts(x);
+  const Positions friction = sim.friction_force(x_prev, x);
+  const Positions a = (x - 2.0 * x_prev + x_prev2) / (h * h);
+  const double g = sim.settings().gravity.norm();
+  VertexBalance b;
+  for (auto* v : {&b.residual, &b.inertia, &b.elastic, &b.external, &b.collision, &b.friction, &b.weight})
+    v->resize(n);
+  for (int i = 0; i < n; ++i) {
+    const double mass = sim.mesh().mass[i];
+    const Vec3 ma = mass * a.segment<3>(3 * i);
+    const Vec3 sum = f.elastic.segment<3>(3 * i) + f.external.segment<3>(3 * i) + f.collision.segment<3>(3 * i) +
+                     friction.segment<3>(3 * i);
+    b.residual[i] = (ma - sum).norm();
+    b.inertia[i] = ma.norm();
+    b.elastic[i] = f.elastic.segment<3>(3 * i).norm();
+    b.external[i] = f.external.segment<3>(3 * i).norm();
+    b.collision[i] = f.collision.segment<3>(3 * i).norm();
+    b.friction[i] = friction.segment<3>(3 * i).norm();
+    b.weight[i] = mass * g;
+  }
+  return b;
 }
 
 FrameMetrics frame_metrics(const ClothSimulator& sim, const Positions& x_prev2,

@@ -35,6 +35,23 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
                             const Positions& x_prev, const Positions& x, double h,
                             FrameMetrics& m, const std::vector<int>& excluded);
 
+// The out-of-balance force of frame x_t per vertex, and the size of each term it balances
+// (N): r_i = m_i a_i − (elastic + external + collision + friction)_i. Which term is large
+// tells a prediction that hangs wrong (inertia, elastic) from one inside the body
+// (collision: the penalty's force grows with the depth, so its maximum restates the
+// deepest penetration).
+struct VertexBalance {
+  std::vector<double> residual;   // ‖r_i‖
+  std::vector<double> inertia;    // ‖m_i a_i‖
+  std::vector<double> elastic;    // ‖membrane + bending‖
+  std::vector<double> external;   // ‖gravity + pins + rays‖
+  std::vector<double> collision;  // ‖collision penalty‖
+  std::vector<double> friction;   // ‖friction over x_{t−1} → x_t‖
+  std::vector<double> weight;     // m_i ‖g‖ (the scale of the relative figures)
+};
+VertexBalance vertex_balance(const ClothSimulator& sim, const Positions& x_prev2, const Positions& x_prev,
+                             const Positions& x, double h);
+
 // Both of the above.
 FrameMetrics frame_metrics(const ClothSimulator& sim, const Positions& x_prev2,
                            const Positions& x_prev, const Positions& x, double h);

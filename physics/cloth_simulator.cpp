@@ -178,12 +178,18 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
 }
 
 Positions ClothSimulator::total_force(const Positions& x) const {
-  Positions g = Positions::Zero(x.size());
-  const Energy* forces[] = {gravity_.get(), membrane_.get(), bending_.get(),
-                            pins_.get(),    rays_.get(),     collision_.get()};
-  for (const Energy* e : forces)
-    e->evaluate(x, &g, nullptr);
-  return -g;
+  const ForceParts p = force_parts(x);
+  return p.elastic + p.external + p.collision;
+}
+
+ClothSimulator::ForceParts ClothSimulator::force_parts(const Positions& x) const {
+  auto force = [&](std::initializer_list<const Energy*> energies) {
+    Positions g = Positions::Zero(x.size());
+    for (const Energy* e : energies) e->evaluate(x, &g, nullptr);
+    return Positions(-g);
+  };
+  return {force({membrane_.get(), bending_.get()}), force({gravity_.get(), pins_.get(), rays_.get()}),
+          force({collision_.get()})};
 }
 
 Positions ClothSimulator::friction_force(const Positions& x_prev, const Positions& x) const {

@@ -109,6 +109,12 @@ class ClothSimulator {
   // silhouette rays) and collision, summed. Not friction: it is not a function of x alone
   // but of the step's motion (see friction_force).
   Positions total_force(const Positions& x) const;
+  // The same forces by source (N, 3n each): elastic (membrane + bending), external
+  // (gravity, pins, silhouette rays) and collision; they sum to total_force.
+  struct ForceParts {
+    Positions elastic, external, collision;
+  };
+  ForceParts force_parts(const Positions& x) const;
   // Friction force (N, 3n) on the cloth at x after a frame that started at x_prev: the
   // friction energy lagged at x_prev over one frame (time_step; the moving body's motion
   // of the last sub-step times the last step()'s sub-step count, exact for its linear

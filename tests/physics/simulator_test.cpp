@@ -126,6 +126,25 @@ TEST(Simulator, HangingClothSettlesToEquilibrium) {
   EXPECT_GT(all.oob_force_max_rel, 10);
   EXPECT_LT(held.oob_force_max_rel, 1e-3);
   EXPECT_LT(held.oob_force_mean, all.oob_force_mean);
+  // Per vertex: the residual is what measure_out_of_balance averages, the parts sum to
+  // it, and in this static equilibrium gravity (external) is held by the membrane and
+  // bending (elastic) at every free vertex, with no inertia, collision or friction.
+  const VertexBalance b = vertex_balance(sim, x2, x1, r.x, h);
+  ASSERT_EQ(int(b.residual.size()), n * n);
+  double mean_free = 0;
+  for (int i = 0; i < n * n; ++i) {
+    if (i == 0 || i == n - 1) continue;
+    mean_free += b.residual[i] / (n * n - 2);
+    EXPECT_NEAR(b.weight[i], mesh.mass[i] * 9.81, 1e-12);
+    EXPECT_NEAR(b.external[i], b.weight[i], 1e-9) << i;  // gravity alone
+    EXPECT_NEAR(b.elastic[i], b.external[i], 1e-3 * b.weight[i]) << i;
+    EXPECT_LT(b.inertia[i], 1e-3 * b.weight[i]) << i;
+    EXPECT_EQ(b.collision[i], 0.0);
+    EXPECT_EQ(b.friction[i], 0.0);
+  }
+  EXPECT_NEAR(mean_free, held.oob_force_mean, 1e-12);
+  const ClothSimulator::ForceParts parts = sim.force_parts(r.x);
+  EXPECT_LT((parts.elastic + parts.external + parts.collision - sim.total_force(r.x)).lpNorm<Eigen::Infinity>(), 1e-12);
 }
 
 TEST(Simulator, ClothDroppedOnSphereNeverPenetrates) {
