@@ -11,7 +11,7 @@
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "capture/io/atomic_file.h"
-#include "capture/training/split_evaluation.h"
+#include "capture/evaluation/split_evaluation.h"
 #include "capture/training/trainer.h"
 #include "graph/error.h"
 #include "graph/threads.h"
@@ -29,16 +29,21 @@ void run_evaluation(const capture::TrainOptions& o, const std::string& split) {
   const capture::SplitEvaluation e = capture::evaluate_split(o.config, o.data, model.string(), split);
   const std::string out = (fs::path(o.run) / ("evaluation_" + split + ".json")).string();
   weft::write_text_atomically(out, e.to_json());
-  spdlog::info("{} frames × {} views ({:.1f} s): keypoints {:.2f} px (mean pose with the true root rotation {:.2f}), joints {:.1f} mm, "
-               "root-relative {:.1f} mm (mean pose with the true root rotation {:.1f}), root rotation {:.1f}°; silhouette IoU {:.4f} (template {:.4f}); cloth {:.1f} mm "
-               "(PADefNet off {:.1f}, the template skinned by the true pose {:.1f}), body {:.1f} mm; penetration {:.2f} mm mean, {:.2f} max, {:.2f} % of cloth vertices; "
-               "out-of-balance {:.3g} N mean ({:.3g} m g), {:.3g} N max ({:.3g} m g) over {} frames",
-               e.frames, e.views, e.seconds, e.keypoint_error_px, e.mean_pose_keypoint_error_px, e.joint_error_mm,
-               e.joint_error_root_relative_mm, e.mean_pose_joint_error_root_relative_mm, e.root_rotation_error_deg,
-               e.silhouette_iou,
-               e.template_silhouette_iou, e.cloth_error_mm, e.template_cloth_error_mm, e.skinned_true_pose_cloth_error_mm, e.body_error_mm, e.penetration_mean_mm,
-               e.penetration_max_mm, 100 * e.penetrating_fraction, e.oob_force_mean_n, e.oob_force_mean_rel,
-               e.oob_force_max_n, e.oob_force_max_rel, e.oob_frames);
+  spdlog::info("{} frames × {} views ({:.1f} s){}: keypoints {:.2f} px (mean pose with the true root rotation {:.2f}), "
+               "joints {:.1f} mm, root-relative {:.1f} mm (mean pose with the true root rotation {:.1f}), root rotation "
+               "{:.1f}°; silhouette IoU {:.4f} (template {:.4f}); cloth {:.1f} mm, Chamfer {:.1f} mm (PADefNet off {:.1f}, "
+               "the template skinned by the true pose {:.1f}), body {:.1f} mm",
+               e.frames, e.views, e.seconds, e.oracle_pose ? " under the oracle pose" : "", e.keypoint_error_px,
+               e.mean_pose_keypoint_error_px, e.joint_error_mm, e.joint_error_root_relative_mm,
+               e.mean_pose_joint_error_root_relative_mm, e.root_rotation_error_deg, e.silhouette_iou,
+               e.template_silhouette_iou, e.cloth_error_mm, e.chamfer_mm, e.template_cloth_error_mm,
+               e.skinned_true_pose_cloth_error_mm, e.body_error_mm);
+  spdlog::info("penetration {:.2f} mm mean over the vertices inside, {:.3f} over all, {:.2f} max, {:.2f} % of cloth "
+               "vertices; out-of-balance over {} frames: mean {:.3g} N ({:.3g} m g), p95 {:.3g}, p99 {:.3g}, max {:.3g} N; "
+               "outside the body mean {:.3g} N; terms: inertia {:.3g}, elastic {:.3g}, collision {:.3g}, friction {:.3g} N",
+               e.penetration_mean_mm, e.penetration_mean_all_mm, e.penetration_max_mm, 100 * e.penetrating_fraction,
+               e.oob_frames, e.oob_n.mean, e.oob_rel.mean, e.oob_n.p95, e.oob_n.p99, e.oob_n.max, e.oob_outside_n.mean,
+               e.inertia_mean_n, e.elastic_mean_n, e.collision_mean_n, e.friction_mean_n);
   spdlog::info("wrote {}", out);
 }
 

@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "capture/evaluation/frame_measures.h"
+
 namespace weft::capture {
 
 struct EvaluationOptions {
@@ -37,7 +39,6 @@ struct EvaluationOptions {
   std::string synth_config;  // overrides capture.json's synth_config ("" keeps it)
 };
 
-inline constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
 
 // One captured frame's measures (NaN where not measured).
 struct FrameEvaluation {

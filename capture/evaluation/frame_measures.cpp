@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "capture/io/closest_point.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/training/multiview_losses.h"
 #include "graph/error.h"
@@ -44,6 +45,43 @@ Penetration cloth_penetration(const Character& ch, const Vertices& body, const V
                           to_positions(cloth, ch.metres_per_unit));
 }
 
+std::vector<double> cloth_signed_distances_mm(const Character& ch, const Vertices& body, const Vertices& cloth) {
+  const physics::BodyMesh obstacle = body_obstacle(ch, Eigen::MatrixX3d(body * ch.metres_per_unit));
+  std::vector<double> d(cloth.rows());
+  for (int i = 0; i < cloth.rows(); ++i) {
+    const physics::ClosestPoint c = obstacle.closest_point(cloth.row(i).transpose() * ch.metres_per_unit);
+    d[i] = c.face >= 0 ? c.distance * 1e3 : std::numeric_limits<double>::infinity();
+  }
+  return d;
+}
+
+double chamfer_distance_mm(const Vertices& a, const Vertices& b, const Faces& F, double mpu) {
+  WEFT_CHECK(a.rows() == b.rows(), "chamfer_distance_mm: ", a.rows(), " against ", b.rows(), " vertices");
+  WEFT_CHECK(a.rows() > 0 && F.rows() > 0, "chamfer_distance_mm: empty mesh");
+  auto one_way = [&](const Vertices& from, const Vertices& to) {
+    const ClosestTriangleQuery q(to, F);
+    std::vector<double> d(from.rows());
+    tbb::parallel_for(0, int(from.rows()), [&](int i) { d[i] = q.closest(from.row(i).transpose()).distance; });
+    double sum = 0;
+    for (double x : d) sum += x;
+    return sum / d.size();
+  };
+  return 0.5 * (one_way(a, b) + one_way(b, a)) * mpu * 1e3;
+}
+
+Distribution distribution(const std::vector<double>& v) {
+  Distribution d;
+  d.count = int64_t(v.size());
+  if (v.empty()) return d;
+  double sum = 0;
+  for (double x : v) sum += x;
+  d.mean = sum / v.size();
+  d.p95 = quantile(v, 0.95);
+  d.p99 = quantile(v, 0.99);
+  d.max = *std::max_element(v.begin(), v.end());
+  return d;
+}
+
 ClothBalance cloth_out_of_balance(const Character& ch, const SynthSimulationConfig& simulation, double fps,
                                   const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,
                                   const Vertices& cloth_prev, const Vertices& cloth) {
@@ -55,8 +93,14 @@ ClothBalance cloth_out_of_balance(const Character& ch, const SynthSimulationConf
   const physics::Positions x2 = to_positions(cloth_prev2, mpu), x1 = to_positions(cloth_prev, mpu),
                            x = to_positions(cloth, mpu);
   ClothBalance b;
-  physics::measure_out_of_balance(*sim, x2, x1, x, 1.0 / fps, b.all);
-  physics::measure_out_of_balance(*sim, x2, x1, x, 1.0 / fps, b.free, garment_pin_vertices(ch));
+  b.vertices = physics::vertex_balance(*sim, x2, x1, x, 1.0 / fps);
+  const std::vector<int> anchors = garment_pin_vertices(ch);
+  physics::summarize_out_of_balance(b.vertices, b.all);
+  physics::summarize_out_of_balance(b.vertices, b.free, anchors);
+  std::vector<char> held(cloth.rows(), 0);
+  for (int a : anchors) held[a] = 1;
+  for (int i = 0; i < cloth.rows(); ++i)
+    if (!held[i]) b.free_vertices.push_back(i);
   return b;
 }
 

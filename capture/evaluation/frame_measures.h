@@ -14,6 +14,7 @@
 // - silhouette IoU of the rendered body + cloth against a mask per view.
 #include <opencv2/core.hpp>
 
+#include <limits>
 #include <vector>
 
 #include "capture/character/character.h"
@@ -23,6 +24,9 @@
 #include "physics/cloth_metrics.h"
 
 namespace weft::capture {
+
+// "Not measured", in every evaluation: NaN in memory, null in JSON.
+inline constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
 
 // ‖a_i − b_i‖ per row, in mm (rows of a and b correspond; character units × metres_per_unit).
 std::vector<double> vertex_distances_mm(const Vertices& a, const Vertices& b, double metres_per_unit);
@@ -37,6 +41,22 @@ double mean_joint_error_mm(const Vertices& predicted_body25, const Vertices& tru
 
 // Cloth vertices inside the body (depths in metres).
 Penetration cloth_penetration(const Character& character, const Vertices& body, const Vertices& cloth);
+// Signed distance (mm) of each cloth vertex to the body's active faces: < 0 inside.
+std::vector<double> cloth_signed_distances_mm(const Character& character, const Vertices& body,
+                                              const Vertices& cloth);
+
+// Symmetric Chamfer distance (mm) of two meshes with the same faces F (a prediction and
+// its ground truth): the mean distance of a's vertices to b's surface and of b's vertices
+// to a's, averaged. Unlike the per-vertex error it does not count a garment that slid
+// along its own surface (a near-symmetric skirt turned by a few degrees) as wrong.
+double chamfer_distance_mm(const Vertices& a, const Vertices& b, const Faces& F, double metres_per_unit);
+
+// Mean, 95th and 99th percentile (quantile()) and max of pooled values; NaN for none.
+struct Distribution {
+  double mean = kNotMeasured, p95 = kNotMeasured, p99 = kNotMeasured, max = kNotMeasured;
+  int64_t count = 0;
+};
+Distribution distribution(const std::vector<double>& values);
 
 // Out-of-balance force of frame t given frames t − 2 and t − 1, 1/fps s apart (the
 // character needs a garment). body_prev and body: the body at frames t − 1 and t. The
@@ -48,6 +68,8 @@ Penetration cloth_penetration(const Character& character, const Vertices& body, 
 //   tiny dataset's simulated ground truth, where the free vertices are in balance).
 struct ClothBalance {
   physics::FrameMetrics free, all;
+  physics::VertexBalance vertices;  // per vertex, anchors included: the residual and its terms (N)
+  std::vector<int> free_vertices;   // the vertices `free` is over (not anchors)
 };
 ClothBalance cloth_out_of_balance(const Character& character, const SynthSimulationConfig& simulation, double fps,
                                   const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,

@@ -16,11 +16,13 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 #include "capture/character/skeletool_io.h"
+#include "capture/evaluation/split_evaluation.h"
 #include "capture/io/openpose.h"
 #include "capture/studio/synthetic_studio.h"
 #include "capture/training/capture_networks.h"
@@ -223,6 +225,13 @@ TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
   // Only PADefNet's graph moves the keypoints off the ground truth's (by millimetres after
   // 5 steps; an untrained PoseNet is hundreds of millimetres off).
   EXPECT_LT(std::stod(c[3]), 20.0) << "joint error (mm) under the oracle pose: " << row;
+  // Its evaluation poses by the ground truth too: no root rotation to measure.
+  const nlohmann::json ev = nlohmann::json::parse(
+      evaluate_split(config.string(), tiny_data().string(), (dir / "run" / "model.safetensors").string(), "val")
+          .to_json());
+  EXPECT_TRUE(ev["oracle_pose"].get<bool>());
+  EXPECT_TRUE(ev["root_rotation_error_deg"].is_null());
+  EXPECT_LT(ev["joint_error_mm"].get<double>(), 20.0);
 
   // Without PADefNet the oracle prediction is the ground truth's posed template.
   const DatasetInfo info = read_dataset_info(tiny_data().string());
@@ -248,6 +257,54 @@ TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
   o.data = no_gt.string();
   o.run = (dir / "run_no_gt").string();
   weft::capture::testing::expect_error([&] { train(o); }, {"oracle_pose", "pose.motion", "does not exist"});
+}
+
+// The evaluation of a trained model on a split (`weft train --evaluate`): every prediction
+// (frame × input view) has its row, the summary is the rows' pooled figures, the garment's
+// out-of-balance force is measured on every frame with two predecessors in its view and
+// split into its terms, and what is not measured is null.
+TEST(Training, SplitEvaluationMeasuresEveryPrediction) {
+  REQUIRE_HUMAN();
+  const Fixture& f = fixture();
+  const SplitEvaluation e = evaluate_split(repo_file("configs/train/tiny.yaml"), f.data.string(),
+                                           (f.reference / "model.safetensors").string(), "train");
+  const nlohmann::json j = nlohmann::json::parse(e.to_json());
+  EXPECT_EQ(j["split"], "train");
+  EXPECT_FALSE(j["oracle_pose"].get<bool>());
+  const int frames = j["frames"], views = j["views"];
+  EXPECT_EQ(frames, 4);
+  ASSERT_EQ(int(j["per_frame"].size()), frames * views);
+  EXPECT_EQ(j["predictions"], frames * views);
+  // Frames 0..3 of one clip: frames 2 and 3 of each view have two predecessors.
+  EXPECT_EQ(j["oob_frames"], 2 * views);
+  int with_force = 0;
+  double sum_cloth = 0, sum_force = 0;
+  for (const auto& row : j["per_frame"]) {
+    ASSERT_TRUE(row["cloth_error_mm"].is_number());
+    ASSERT_TRUE(row["chamfer_mm"].is_number());
+    // A surface distance never exceeds the vertex-to-vertex one.
+    EXPECT_LE(row["chamfer_mm"].get<double>(), row["cloth_error_mm"].get<double>() + 1e-9);
+    sum_cloth += row["cloth_error_mm"].get<double>();
+    const int frame = row["frame"];
+    if (frame >= 2) {
+      ++with_force;
+      sum_force += row["oob_mean_n"].get<double>();
+      EXPECT_GE(row["oob_p95_n"].get<double>(), 0.0);
+      EXPECT_LE(row["oob_p95_n"].get<double>(), row["oob_max_n"].get<double>());
+      EXPECT_TRUE(row["inertia_mean_n"].is_number() && row["elastic_mean_n"].is_number() &&
+                  row["collision_mean_n"].is_number() && row["friction_mean_n"].is_number());
+    } else {
+      EXPECT_TRUE(row["oob_mean_n"].is_null()) << "frame " << frame << " has no two predecessors";
+    }
+  }
+  EXPECT_EQ(with_force, 2 * views);
+  EXPECT_NEAR(j["cloth_error_mm"].get<double>(), sum_cloth / (frames * views), 1e-6);
+  // Every measured frame has the same free vertices: the pooled mean is the frames' mean.
+  EXPECT_NEAR(j["oob_force_n"]["mean"].get<double>(), sum_force / with_force, 1e-9);
+  EXPECT_LE(j["oob_force_n"]["p95"].get<double>(), j["oob_force_n"]["p99"].get<double>());
+  EXPECT_LE(j["oob_force_n"]["p99"].get<double>(), j["oob_force_n"]["max"].get<double>());
+  EXPECT_TRUE(j["root_rotation_error_deg"].is_number());
+  EXPECT_GT(j["penetration_mean_all_mm"].get<double>(), -1e-12);
 }
 
 TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
