@@ -32,15 +32,16 @@ void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
 void measure_out_of_balance(const ClothSimulator& sim, const Positions& x_prev2,
                             const Positions& x_prev, const Positions& x, double h,
                             FrameMetrics& m, const std::vector<int>& excluded) {
-  const int n = sim.mesh().num_vertices();
+  summarize_out_of_balance(vertex_balance(sim, x_prev2, x_prev, x, h), m, excluded);
+}
+
+void summarize_out_of_balance(const VertexBalance& b, FrameMetrics& m, const std::vector<int>& excluded) {
+  const int n = int(b.residual.size());
   std::vector<char> skip(n, 0);
   for (int i : excluded) {
     WEFT_CHECK(i >= 0 && i < n, "metrics: excluded vertex ", i, " is not in 0..", n - 1);
     skip[i] = 1;
   }
-  WEFT_CHECK(x.size() == 3 * n && x_prev.size() == x.size() && x_prev2.size() == x.size(),
-             "metrics: frames must have ", 3 * n, " entries");
-  const VertexBalance b = vertex_balance(sim, x_prev2, x_prev, x, h);
   double sum = 0, sum_rel = 0;
   int counted = 0;
   m.oob_force_max = m.oob_force_max_rel = 0;

@@ -51,6 +51,8 @@ struct VertexBalance {
 };
 VertexBalance vertex_balance(const ClothSimulator& sim, const Positions& x_prev2, const Positions& x_prev,
                              const Positions& x, double h);
+// measure_out_of_balance's figures from a vertex balance, over every vertex but `excluded`.
+void summarize_out_of_balance(const VertexBalance& balance, FrameMetrics& m, const std::vector<int>& excluded = {});
 
 // Both of the above.
 FrameMetrics frame_metrics(const ClothSimulator& sim, const Positions& x_prev2,
