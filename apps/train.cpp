@@ -109,6 +109,10 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--data", o->data, "Dataset folder (holds dataset.yaml)")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("--out", o->run, "Run folder (created if missing)")->required();
   cmd->add_flag("--resume", o->resume, "Continue the run in --out from its last checkpoint, exactly");
+  cmd->add_option("--init", o->init_weights,
+                  "Start from these weights (a model.safetensors or checkpoint of the same networks) instead of a "
+                  "fresh initialisation, e.g. to branch several physics-stage runs from one warm start")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--stop-after", o->stop_after, "Stop after this global step (checkpointed), as if interrupted")
       ->check(CLI::NonNegativeNumber);
   auto threads = std::make_shared<int>(0);

@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# The experiment behind the paper's physics claim, with the pose taken out of it:
+#
+#   bench/physics_claim.sh [--quick] OUT
+#
+# 1. A dataset with 3D ground truth (configs/synth/physics_claim.yaml: 72 frames, the
+#    coarse skirt, 4 views; the test split is the motion's last 18 frames).
+# 2. One warm start of PADefNet under the oracle pose (training config key oracle_pose:
+#    the skeleton posed by gt/pose.motion, so pose error does not enter; no PoseNet).
+# 3. From that one model (weft train --init), the physics stage in three arms, each with
+#    the same seeds, hence the same steps on the same window batches:
+#      physics               L_sil + L_lm + L_att + L_sim + ARAP (body and garment)
+#      arap_only             the same with the simulation weight 0
+#      physics_no_cloth_arap L_sim with the body's ARAP only
+# 4. Every arm evaluated on the test split under the oracle pose (weft train --evaluate
+#    test), and bench/physics_claim.py: per metric the arm / ARAP-only ratio of means over
+#    the paired predictions (IoU: difference in points) with a 95 % bootstrap interval over
+#    test frames, and each seed's ratio, in OUT/physics_claim.json.
+# --quick: 3 seeds, short stages (about 15 minutes on 2 cores); without it 3 seeds and
+# stages 4x longer. Reuses OUT/data and OUT/warmup when present. Needs a build (scripts/build.sh).
+set -euo pipefail
+quick=0
+out=""
+for a in "$@"; do
+  case "$a" in
+    --quick) quick=1 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -*) echo "physics_claim: unknown option $a (expected --quick)" >&2; exit 2 ;;
+    *) out=$a ;;
+  esac
+done
+[ -n "$out" ] || { echo "usage: bench/physics_claim.sh [--quick] OUT" >&2; exit 2; }
+root=$(cd "$(dirname "$0")/.." && pwd)
+weft=${WEFT_BUILD_DIR:-$root/build}/apps/weft
+[ -x "$weft" ] || { echo "physics_claim: $weft is not built (run scripts/build.sh)" >&2; exit 2; }
+mkdir -p "$out/configs" "$out/arms"
+out=$(cd "$out" && pwd)
+seeds=(1 2 3)
+if ((quick)); then warm_steps=300; physics_steps=60; else warm_steps=1200; physics_steps=240; fi
+start=$(date +%s)
+log() { echo "physics_claim [$(($(date +%s) - start)) s]: $*"; }
+
+if [ ! -f "$out/data/dataset.yaml" ]; then
+  log "synth: configs/synth/physics_claim.yaml"
+  "$weft" synth --config "$root/configs/synth/physics_claim.yaml" --out "$out/data" >"$out/synth.log" 2>&1
+fi
+
+# config NAME SEED STAGES: a training config under the oracle pose.
+config() {
+  cat >"$out/configs/$1.yaml" <<EOF
+# Written by bench/physics_claim.sh.
+seed: $2
+oracle_pose: true
+network: {backbone: resnet18, input_size: 64}
+stages:
+$3
+physics: {synth_config: $root/configs/synth/physics_claim.yaml, window_frames: 4, max_iterations: 60, tolerance: 1.0e-2}
+silhouette_size: 64
+loader_threads: 1
+log_every: 20
+validate_every: 0
+validation_samples: 16
+checkpoint_every: 100
+keep_checkpoints: 1
+EOF
+}
+
+if [ ! -f "$out/warmup/model.safetensors" ]; then
+  config warmup 0 "  warmup: {steps: $warm_steps, batch_size: 8, lr: 1.0e-3, final_lr_fraction: 0.1, landmarks: 1, silhouette: 1, arap: 10, attachment: 10}"
+  log "warm start: $warm_steps steps"
+  rm -rf "$out/warmup"
+  "$weft" train --config "$out/configs/warmup.yaml" --data "$out/data" --out "$out/warmup" >"$out/warmup.log" 2>&1
+  "$weft" train --config "$out/configs/warmup.yaml" --data "$out/data" --out "$out/warmup" --evaluate test \
+    >>"$out/warmup.log" 2>&1
+fi
+
+stage="batch_size: 8, lr: 2.0e-4, final_lr_fraction: 1, landmarks: 1, silhouette: 1, attachment: 10"
+for seed in "${seeds[@]}"; do
+  for arm in physics arap_only physics_no_cloth_arap; do
+    case $arm in
+      physics) weights="simulation: 1, arap: 10" ;;
+      arap_only) weights="simulation: 0, arap: 10" ;;
+      physics_no_cloth_arap) weights="simulation: 1, arap: 10, cloth_arap: 0" ;;
+    esac
+    run="$out/arms/$arm-$seed"
+    [ -f "$run/evaluation_test.json" ] && continue
+    config "$arm-$seed" "$seed" "  physics: {steps: $physics_steps, $stage, $weights}"
+    log "$arm, seed $seed: $physics_steps physics steps from the warm start"
+    rm -rf "$run"
+    "$weft" train --config "$out/configs/$arm-$seed.yaml" --data "$out/data" --out "$run" \
+      --init "$out/warmup/model.safetensors" >"$run.log" 2>&1
+    "$weft" train --config "$out/configs/$arm-$seed.yaml" --data "$out/data" --out "$run" --evaluate test \
+      >>"$run.log" 2>&1
+  done
+done
+
+log "statistics"
+quick_flag=()
+((quick)) && quick_flag=(--quick)
+python3 "$root/bench/physics_claim.py" "$out" --seeds "$(IFS=,; echo "${seeds[*]}")" \
+  --wall-seconds "$(($(date +%s) - start))" "${quick_flag[@]}"
