@@ -56,7 +56,7 @@ void train_and_report(const capture::TrainOptions& o) {
   });
   spdlog::info("trained steps {}–{} in {:.1f} s ({:.2f} s/step){}", s.first_step, s.last_step, s.seconds,
                s.seconds / std::max<int64_t>(1, s.last_step - s.first_step + 1),
-               s.simulation_windows ? fmt::format("; {} of {} simulation windows failed and were dropped",
+               s.simulation_windows ? fmt::format("; {} of {} simulation windows had a failed step (their converged frames kept)",
                                                   s.simulation_failures, s.simulation_windows)
                                     : std::string());
   for (const auto& [status, count] : s.failure_statuses)

@@ -60,7 +60,7 @@ struct ValidationReport {
 struct TrainSummary {
   int64_t first_step = 1, last_step = 0;  // the steps this call ran
   double seconds = 0;
-  int simulation_windows = 0, simulation_failures = 0;  // failed windows are dropped from L_sim
+  int simulation_windows = 0, simulation_failures = 0;  // windows with a failed step (their converged frames still count)
   std::map<std::string, int> failure_statuses;  // per failed window, its first failed step's status
   ValidationReport last_validation;
 };
