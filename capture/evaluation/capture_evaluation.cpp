@@ -31,16 +31,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Means of measured (finite) values.
-struct Mean {
-  double sum = 0;
-  int64_t n = 0;
-  void add(double x, int64_t count = 1) {
-    if (std::isfinite(x)) sum += x * count, n += count;
-  }
-  double value() const { return n ? sum / n : kNotMeasured; }
-};
-
 double nan_max(double a, double b) { return std::isnan(a) ? b : std::isnan(b) ? a : std::max(a, b); }
 
 // A ground-truth mesh of the dataset, checked against the template.
@@ -189,8 +179,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   };
 
   std::vector<float> cloth_distances, body_distances;  // pooled over frames, for the 95th percentiles
-  Mean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv;
-  Mean oob_n, oob_rel, gt_oob_n, gt_oob_rel, oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;
+  MeasuredMean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv;
+  MeasuredMean oob_n, oob_rel, gt_oob_n, gt_oob_rel, oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;
   double pen_sum = 0, gt_pen_sum = 0;
   int64_t inside = 0, gt_inside = 0, cloth_vertices = 0;
   Kept prev2, prev1;
@@ -262,7 +252,7 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
         fe.gt_oob_mean_n = t.free.oob_force_mean, fe.gt_oob_max_n = t.free.oob_force_max;
         fe.gt_oob_mean_rel = t.free.oob_force_mean_rel, fe.gt_oob_max_rel = t.free.oob_force_max_rel;
         ++e.oob_frames, ++e.gt_oob_frames;
-        const auto add = [](Mean& mean, MetricSummary& s, double frame_mean, double frame_max) {
+        const auto add = [](MeasuredMean& mean, MetricSummary& s, double frame_mean, double frame_max) {
           mean.add(frame_mean);
           s.max = nan_max(s.max, frame_max);
         };
@@ -286,7 +276,7 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
         masks.push_back(read_dataset_mask(info, f, v));
       }
       fe.iou = silhouette_ious(ch, now.body, e.has_cloth ? &now.cloth : nullptr, cams, masks);
-      Mean all, rest;
+      MeasuredMean all, rest;
       for (size_t v = 0; v < fe.iou.size(); ++v) {
         all.add(fe.iou[v]);
         if (int(v) != input_view) rest.add(fe.iou[v]);

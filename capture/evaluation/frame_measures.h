@@ -14,6 +14,8 @@
 // - silhouette IoU of the rendered body + cloth against a mask per view.
 #include <opencv2/core.hpp>
 
+#include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -50,6 +52,17 @@ std::vector<double> cloth_signed_distances_mm(const Character& character, const 
 // to a's, averaged. Unlike the per-vertex error it does not count a garment that slid
 // along its own surface (a near-symmetric skirt turned by a few degrees) as wrong.
 double chamfer_distance_mm(const Vertices& a, const Vertices& b, const Faces& F, double metres_per_unit);
+
+// A running mean of measured values: non-finite values (not measured) are left out, and
+// the mean of none is kNotMeasured. count weighs a value (e.g. a mean over count items).
+struct MeasuredMean {
+  double sum = 0;
+  int64_t n = 0;
+  void add(double x, int64_t count = 1) {
+    if (std::isfinite(x)) sum += x * count, n += count;
+  }
+  double value() const { return n ? sum / n : kNotMeasured; }
+};
 
 // Mean, 95th and 99th percentile (quantile()) and max of pooled values; NaN for none.
 struct Distribution {

@@ -31,13 +31,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Mean {
-  double sum = 0;
-  int64_t n = 0;
-  void add(double x, int64_t count = 1) { sum += x * count, n += count; }
-  double value() const { return n ? sum / n : kNotMeasured; }
-};
-
 // Mean distance (character units) between corresponding rows.
 double mean_distance(const Vertices& a, const Vertices& b) { return (a - b).rowwise().norm().mean(); }
 
@@ -139,10 +132,10 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
 
   // Ground truth, and the floor: the mean pose given the true root rotation, placed like
   // PoseNet's (the translation from the frame's detections).
-  Mean mean_kp, mean_joint_aligned;
+  MeasuredMean mean_kp, mean_joint_aligned;
   std::map<int, Vertices> gt_keypoints, gt_cloth, gt_body;
-  Mean skinned_cloth_err;  // the template skinned by the true pose against the simulated garment
-  Mean template_cloth_err;  // the template skinned by the predicted pose (PADefNet off)
+  MeasuredMean skinned_cloth_err;  // the template skinned by the true pose against the simulated garment
+  MeasuredMean template_cloth_err;  // the template skinned by the predicted pose (PADefNet off)
   std::map<int, Eigen::Vector3d> gt_pivot;
   std::map<int, Eigen::Matrix3d> gt_rotation;
   const Eigen::Matrix3d rest_rotation = forward_kinematics(ch.skeleton, ch.rest_dofs)[param.pivot_joint].linear();
@@ -189,8 +182,8 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.oracle_pose = cfg.oracle_pose;
   e.frames = int(frames.size());
   e.views = V;
-  Mean rotation_err, kp, joint, joint_aligned, iou, tmpl_iou, cloth_err, chamfer, body_err, pen, pen_all, inside;
-  Mean inertia, elastic, collision, friction;
+  MeasuredMean rotation_err, kp, joint, joint_aligned, iou, tmpl_iou, cloth_err, chamfer, body_err, pen, pen_all, inside;
+  MeasuredMean inertia, elastic, collision, friction;
   std::vector<double> oob_values, oob_rel_values, oob_outside_values;
   double pen_max = 0;
   for (int v = 0; v < V; ++v) {
@@ -239,7 +232,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
             for (int c = 0; c < 3; ++c) R_pred(r, c) = p.rotation.data<float>()[9 * b + 3 * r + c];
           rotation_err.add(Eigen::AngleAxisd(R_pred.transpose() * gt_rotation[f]).angle() * 180 / M_PI);
         }
-        Mean frame_joint;
+        MeasuredMean frame_joint;
         for (int m = 0; m < kBody25Count; ++m) {
           if (model.keypoint_mask()[m] <= 0 || !G.row(m).allFinite()) continue;
           joint.add((K.row(m) - G.row(m)).norm() * mpu * 1e3);
@@ -270,7 +263,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
           ious[w] = rendered_silhouette_iou(cam, ch, body, p.cloth.defined() ? &cloth : nullptr, sup.mask(f, w));
           tmpl[w] = rendered_silhouette_iou(cam, ch, body_t, p.cloth.defined() ? &cloth_t : nullptr, sup.mask(f, w));
         });
-        Mean frame_iou;
+        MeasuredMean frame_iou;
         for (int w = 0; w < V; ++w) iou.add(ious[w]), tmpl_iou.add(tmpl[w]), frame_iou.add(ious[w]);
         fe.iou = frame_iou.value();
         if (p.cloth.defined()) {
@@ -297,7 +290,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
       const std::vector<double> depth = cloth_signed_distances_mm(ch, body_seq[f], cloth_seq[f]);
       const physics::VertexBalance& vb = cb.vertices;
       std::vector<double> residual, outside;
-      Mean in_f, el_f, co_f, fr_f, rel_f;
+      MeasuredMean in_f, el_f, co_f, fr_f, rel_f;
       for (int i : cb.free_vertices) {
         residual.push_back(vb.residual[i]);
         oob_values.push_back(vb.residual[i]);

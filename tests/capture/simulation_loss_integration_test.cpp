@@ -12,9 +12,11 @@
 #include "capture/studio/cloth_perturbation.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
+#include "capture/io/mesh_io.h"
 #include "capture/training/silhouette_rays.h"
 #include "capture/training/simulation_loss.h"
 #include "tests/capture/coarse_skirt.h"
+#include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
@@ -169,6 +171,49 @@ TEST(SimulationLoss, WindowErrorsNameWhatIsWrong) {
   uneven.body.pop_back();
   weft::capture::testing::expect_error(
       [&] { simulation_loss_window(ch, training_simulation(), uneven, true, rec); }, {"2 bodies for 3"});
+}
+
+// On the tiny dataset's ground truth, whose meshes made the masks, E_cons is nearly
+// satisfied already: every ray starts at one of the cameras, belongs to a garment vertex
+// on the silhouette in front of it, and passes within about a pixel of it (the contour
+// is quantised to the silhouette images' pixels: about 3 cm at the person at 64²).
+TEST(SilhouetteRays, GroundTruthGarmentLiesOnItsRays) {
+  REQUIRE_HUMAN();
+  const auto data = weft::capture::testing::tiny_dataset();
+  const DatasetInfo info = read_dataset_info(data.string());
+  const Character ch = load_character(info.character);
+  const int frame = 2;
+  const MultiviewSupervision sup(info, {frame}, 64);
+  const Vertices body = read_ply((data / "gt" / "body_0002.ply").string()).V;
+  const Vertices cloth = read_ply((data / "gt" / "cloth_0002.ply").string()).V;
+  Faces faces(ch.body.mesh.F.rows() + ch.cloth->mesh.F.rows(), 3);
+  faces << ch.body.mesh.F, (ch.cloth->mesh.F.array() + int(body.rows())).matrix();
+  SilhouetteRayOptions o;
+  o.metres_per_unit = ch.metres_per_unit;
+  const std::vector<weft::physics::RayTarget> rays = silhouette_rays(sup, frame, body, cloth, faces, o);
+  // At 64² the silhouette's visibility test keeps few garment vertices (10 on this frame).
+  ASSERT_GE(rays.size(), 5u);
+  std::vector<double> miss_px;
+  for (const auto& r : rays) {
+    ASSERT_GE(r.vertex, 0);
+    ASSERT_LT(r.vertex, cloth.rows());
+    EXPECT_NEAR(r.direction.norm(), 1.0, 1e-9);
+    int view = -1;
+    for (int v = 0; v < sup.views(); ++v)
+      if ((r.origin - sup.silhouette_camera(frame, v).center() * ch.metres_per_unit).norm() < 1e-9) view = v;
+    ASSERT_GE(view, 0) << "a ray that starts at no camera";
+    const Eigen::Vector3d x = cloth.row(r.vertex).transpose() * ch.metres_per_unit;
+    const Eigen::Vector3d d = x - r.origin;
+    ASSERT_GT(d.dot(r.direction), 0.0) << "the vertex lies in front of its camera";
+    const double pixel_m = d.dot(r.direction) / sup.silhouette_camera(frame, view).K(0, 0);
+    miss_px.push_back((d - d.dot(r.direction) * r.direction).norm() / pixel_m);
+  }
+  std::sort(miss_px.begin(), miss_px.end());
+  EXPECT_LT(miss_px[miss_px.size() / 2], 1.5) << "median distance of a vertex to its ray, in pixels";
+  EXPECT_LT(miss_px.back(), o.max_pixels + 1.0);
+  // A contour within 0 pixels: almost no vertex projects exactly onto a pixel centre.
+  o.max_pixels = 0;
+  EXPECT_LT(silhouette_rays(sup, frame, body, cloth, faces, o).size(), rays.size() / 4 + 1);
 }
 
 TEST(SilhouetteRays, MaskContourIsTheForegroundsBorder) {
