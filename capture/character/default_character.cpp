@@ -36,7 +36,7 @@ int count(const StrictYaml& y, const YAML::Node& n, const std::string& key, int 
 DefaultCharacterConfig parse_config(const StrictYaml& y, const YAML::Node& root) {
   DefaultCharacterConfig c;
   c.file = y.file;
-  y.check_keys(root, "", {"name", "base", "mesh", "height_m", "body", "garment"});
+  y.check_keys(root, "", {"name", "base", "mesh", "height_m", "body", "garment", "appearance"});
   if (root["name"]) c.name = y.get<std::string>(root["name"], "name", "a string");
   if (root["base"]) {
     // An existing character.yaml dressed with a generated garment: its body is used as is.
@@ -82,6 +82,7 @@ DefaultCharacterConfig parse_config(const StrictYaml& y, const YAML::Node& root)
     if (g["graph_nodes"]) c.cloth_graph_nodes = count(y, g["graph_nodes"], "garment.graph_nodes", 1, 100000);
     if (g["rigidity"]) c.cloth_rigidity = y.number(g["rigidity"], "garment.rigidity", 0, 1);
   }
+  if (root["appearance"]) c.appearance = parse_appearance(y, root["appearance"], "appearance");
   return c;
 }
 
@@ -116,6 +117,14 @@ GarmentSpec garment_spec(const DefaultCharacterConfig& cfg, double metres_per_un
   spec.nodes_per_vertex = cfg.nodes_per_vertex;
   spec.rigidity = cfg.cloth_rigidity;
   return spec;
+}
+
+// The garment's colours (appearance.h), when there is one.
+void paint_garment(DefaultCharacter& out, const DefaultCharacterConfig& cfg) {
+  Character& ch = out.character;
+  if (!ch.cloth) return;
+  ch.cloth->mesh.colors =
+      garment_colors(ch.cloth->mesh, out.garment_top_y, cfg.length / ch.metres_per_unit, cfg.appearance);
 }
 
 // The MakeHuman path: body from a mesh file, skeleton and landmarks fitted to it. Metres.
@@ -168,6 +177,10 @@ DefaultCharacter make_fitted_character(const DefaultCharacterConfig& cfg) {
     out.garment_min_distance = fit.min_distance;
     out.garment_inside = fit.inside;
   }
+  if (cfg.appearance.textured) {
+    body.mesh.colors = body_colors(body.mesh, out.fit, out.arm_vertices, cfg.appearance);
+    paint_garment(out, cfg);
+  }
   return out;
 }
 
@@ -199,6 +212,7 @@ DefaultCharacter make_dressed_base_character(const DefaultCharacterConfig& cfg) 
     out.garment_min_distance = fit.min_distance;
     out.garment_inside = fit.inside;
   }
+  if (cfg.appearance.textured) paint_garment(out, cfg);
   return out;
 }
 

@@ -10,6 +10,7 @@
 // character"): the same three functions, the base's own units.
 #include <string>
 
+#include "capture/character/appearance.h"
 #include "capture/character/body_skeleton_fit.h"
 #include "capture/character/character.h"
 #include "capture/character/dressed_character.h"
@@ -35,6 +36,9 @@ struct DefaultCharacterConfig {
   int rings = 48;            // rings top to hem
   int cloth_graph_nodes = 300;
   double cloth_rigidity = 0.1;
+  // Per-vertex colours painted on the body and garment (capture/character/appearance.h);
+  // with base: the garment only (the base keeps its own texture).
+  AppearanceConfig appearance;
 };
 
 // Strict YAML (unknown keys and bad values are errors naming the key, the file and the
