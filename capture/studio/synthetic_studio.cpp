@@ -148,14 +148,30 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
 }
 
 void parse_render(const StrictYaml& y, const YAML::Node& n, SynthRenderConfig& r) {
-  y.check_keys(n, "render.", {"background", "supersample", "dt_scale", "body_texture"});
+  y.check_keys(n, "render.", {"background", "photos", "lighting", "supersample", "dt_scale", "body_texture"});
   if (n["body_texture"]) r.body_texture = y.path(n["body_texture"], "render.body_texture");
   if (n["background"]) {
-    const std::string b = y.get<std::string>(n["background"], "render.background", "green or clutter");
+    const std::string b = y.get<std::string>(n["background"], "render.background", "green, clutter or photos");
     if (b == "green") r.background = BackgroundKind::solid;
     else if (b == "clutter") r.background = BackgroundKind::clutter;
-    else y.fail_at(n["background"], "render.background", "expected green or clutter, found '" + b + "'");
+    else if (b == "photos") r.background = BackgroundKind::image;
+    else y.fail_at(n["background"], "render.background", "expected green, clutter or photos, found '" + b + "'");
   }
+  if (n["photos"]) {
+    if (r.background != BackgroundKind::image) y.fail_at(n["photos"], "render.photos", "needs background: photos");
+    const std::string where = y.get<std::string>(n["photos"], "render.photos", "a folder or file of photos");
+    const std::string full = (y.dir / where).lexically_normal().string();
+    try {
+      r.photos = list_photos(full, y.file + ": render.photos");
+    } catch (const Error&) {
+      y.fail_at(n["photos"], "render.photos",
+                "no .jpg, .jpeg or .png photo at " + full +
+                    " (Debian's mate-backgrounds has /usr/share/backgrounds/mate/nature: scripts/setup.sh installs it)");
+    }
+  }
+  if (r.background == BackgroundKind::image && r.photos.empty())
+    y.fail_at(n["background"], "render.background", "photos needs render.photos: a folder or file of photos");
+  if (n["lighting"]) r.lighting = parse_studio_lighting(y, n["lighting"], "render.lighting");
   if (n["supersample"]) {
     r.supersample = static_cast<int>(y.number(n["supersample"], "render.supersample", 1, 7));
     if (r.supersample % 2 == 0) y.fail_at(n["supersample"], "render.supersample", "expected an odd number 1..7");
@@ -631,6 +647,18 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
       cfg.render.background == BackgroundKind::clutter
           ? cluttered_background(cameras[0][0].width, cameras[0][0].height, cfg.seed)
           : cv::Mat();
+  // Per clip: the lights, and (photos) each view's background.
+  std::vector<int> clip_of(frames);
+  std::vector<Lighting> clip_lighting;
+  std::vector<std::vector<cv::Mat>> clip_photos(clips);  // [clip][view]
+  for (int k = 0; k < clips; ++k) {
+    std::fill(clip_of.begin() + segments[k], clip_of.begin() + segment_end(k), k);
+    clip_lighting.push_back(draw_lighting(cfg.render.lighting, cfg.seed, k));
+    if (cfg.render.background == BackgroundKind::image)
+      for (int v = 0; v < num_views; ++v)
+        clip_photos[k].push_back(draw_photo_background(cfg.render.photos, cameras[v][segments[k]].width,
+                                                       cameras[v][segments[k]].height, cfg.seed, k, v));
+  }
   cv::Mat body_texture;
   if (!cfg.render.body_texture.empty()) {
     body_texture = cv::imread(cfg.render.body_texture, cv::IMREAD_COLOR);
@@ -652,17 +680,24 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     if (!body_texture.empty()) {
       body.source = ColorSource::texture;
       body.texture = body_texture;
+    } else if (ch.body.mesh.has_colors()) {
+      body.source = ColorSource::vertex;  // a painted character (appearance.h)
     }
     garment.mesh = &cloth_mesh;
     garment.vertices = &cloth[f];
     garment.part = 2;
     garment.color = cv::Scalar(60, 60, 190);  // BGR: a red skirt
+    if (cloth_mesh.has_colors()) garment.source = ColorSource::vertex;
     RenderOptions o;
     o.supersample = cfg.render.supersample;
+    o.lighting = clip_lighting[clip_of[f]];
     o.lighting.exposure = exposure[f];
     if (cfg.render.background == BackgroundKind::clutter) {
       o.background.kind = BackgroundKind::image;
       o.background.image = clutter;
+    } else if (cfg.render.background == BackgroundKind::image) {
+      o.background.kind = BackgroundKind::image;
+      o.background.image = clip_photos[clip_of[f]][v];
     }
     const RenderResult r = render(cam, {body, garment}, o);
     const cv::Mat dt = distance_transform(r.mask);

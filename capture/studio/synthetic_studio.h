@@ -16,6 +16,7 @@
 
 #include "capture/character/default_character.h"
 #include "capture/render/renderer.h"
+#include "capture/studio/scene_dressing.h"
 #include "capture/studio/studio_rig.h"
 #include "capture/studio/synthetic_keypoints.h"
 #include "physics/cloth_model.h"
@@ -67,7 +68,11 @@ struct SynthCameraConfig {
 };
 
 struct SynthRenderConfig {
-  BackgroundKind background = BackgroundKind::solid;  // solid (green screen) or clutter
+  // solid (`green`: a green screen), clutter (procedural) or image (`photos`: a crop of one
+  // of `photos` per clip and view, capture/studio/scene_dressing.h)
+  BackgroundKind background = BackgroundKind::solid;
+  std::vector<std::string> photos;  // background: photos (a folder's images, or one file)
+  StudioLightingConfig lighting;    // ambient, headlight, directional lights drawn per clip
   int supersample = 1;
   double dt_scale = 16;    // dt PNG value = min(65535, round(dt_scale · distance in pixels))
   std::string body_texture;  // an image for the body's OBJ texture coordinates (ddc.png); empty: flat skin colour

@@ -95,6 +95,20 @@ TEST(SynthConfig, ErrorsNameTheFileAndKey) {
   expect_error([] { parse_synth_config(base("keypoints: {dropout: 1.5}\n"), "bad.yaml"); },
                {"keypoints.dropout: expected a number in [0, 1], found 1.5"});
   expect_error([] { parse_synth_config(base("render: {background: blue}\n"), "bad.yaml"); }, {"render.background"});
+  // The look of a take: a missing texture, a bad light key, a light range backwards, no photos.
+  expect_error([] { parse_synth_config(base("render: {body_texture: /nonexistent/skin.png}\n"), "bad.yaml"); },
+               {"bad.yaml", "render.body_texture", "/nonexistent/skin.png"});
+  expect_error([] { parse_synth_config(base("render: {lighting: {spotlight: 1}}\n"), "bad.yaml"); },
+               {"bad.yaml", "render.lighting.spotlight"});
+  expect_error([] { parse_synth_config(base("render: {lighting: {lights: 2, intensity: [0.9, 0.1]}}\n"), "bad.yaml"); },
+               {"bad.yaml", "render.lighting.intensity"});
+  expect_error([] { parse_synth_config(base("render: {background: photos}\n"), "bad.yaml"); },
+               {"bad.yaml", "render.background", "render.photos"});
+  expect_error(
+      [] { parse_synth_config(base("render: {background: photos, photos: /nonexistent/photos}\n"), "bad.yaml"); },
+      {"bad.yaml", "render.photos", "/nonexistent/photos"});
+  expect_error([] { parse_synth_config(base("render: {photos: /tmp}\n"), "bad.yaml"); },
+               {"bad.yaml", "render.photos", "background: photos"});
   expect_error([] { parse_synth_config(base("splits: {val: 0.6, test: 0.6}\n"), "bad.yaml"); }, {"splits"});
   expect_error([] { parse_synth_config(base("", "  bvh: /nonexistent/clip.bvh\n"), "bad.yaml"); }, {"motion"});
   expect_error([] { parse_synth_config("name: t\ncharacter: /nonexistent.yaml\nmotion: {}\n", "bad.yaml"); },
