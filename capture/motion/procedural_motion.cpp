@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <optional>
 
 #include "capture/io/text_reader.h"
 #include "capture/io/strict_yaml.h"
@@ -21,85 +22,7 @@ constexpr double kGravity = 9.81;  // m/s²
 double deg(double radians) { return radians * 180.0 / kPi; }
 double rad(double degrees) { return degrees * kPi / 180.0; }
 
-// ----------------------------------------------------------------- the generic humanoid
-
-enum J {
-  pelvis, l_hip, l_knee, l_ankle, l_toe, l_toe_end, r_hip, r_knee, r_ankle, r_toe, r_toe_end,
-  spine, chest, neck, head, head_end, l_clavicle, l_shoulder, l_elbow, l_wrist, l_wrist_end,
-  r_clavicle, r_shoulder, r_elbow, r_wrist, r_wrist_end, kJointCount
-};
-
-struct JointDef {
-  const char* name;
-  int parent;
-  double x, y, z;  // offset from the parent (m); x is mirrored for the right side
-  bool end_site;
-};
-
-// Proportions of a 1.75 m adult; thigh and shank lengths are kThigh and kShank.
-constexpr double kThigh = 0.42, kShank = 0.41;
-constexpr JointDef kJoints[kJointCount] = {
-    {"pelvis", -1, 0, 0, 0, false},
-    {"left_hip", pelvis, 0.09, -0.07, 0.0, false},
-    {"left_knee", l_hip, 0, -kThigh, 0, false},
-    {"left_ankle", l_knee, 0, -kShank, 0, false},
-    {"left_toe", l_ankle, 0, -0.06, 0.13, false},
-    {"left_toe_end", l_toe, 0, 0, 0.05, true},
-    {"right_hip", pelvis, -0.09, -0.07, 0.0, false},
-    {"right_knee", r_hip, 0, -kThigh, 0, false},
-    {"right_ankle", r_knee, 0, -kShank, 0, false},
-    {"right_toe", r_ankle, 0, -0.06, 0.13, false},
-    {"right_toe_end", r_toe, 0, 0, 0.05, true},
-    {"spine", pelvis, 0, 0.10, -0.01, false},
-    {"chest", spine, 0, 0.22, 0, false},
-    {"neck", chest, 0, 0.20, 0, false},
-    {"head", neck, 0, 0.10, 0.02, false},
-    {"head_end", head, 0, 0.17, 0, true},
-    {"left_clavicle", chest, 0.02, 0.16, 0.03, false},
-    {"left_shoulder", l_clavicle, 0.16, 0, -0.04, false},
-    {"left_elbow", l_shoulder, 0, -0.29, 0, false},
-    {"left_wrist", l_elbow, 0, -0.25, 0, false},
-    {"left_wrist_end", l_wrist, 0, -0.09, 0, true},
-    {"right_clavicle", chest, -0.02, 0.16, 0.03, false},
-    {"right_shoulder", r_clavicle, -0.16, 0, -0.04, false},
-    {"right_elbow", r_shoulder, 0, -0.29, 0, false},
-    {"right_wrist", r_elbow, 0, -0.25, 0, false},
-    {"right_wrist_end", r_wrist, 0, -0.09, 0, true},
-};
-constexpr double kPelvisHeight = 0.07 + kThigh + kShank + 0.06;  // toe joints on the floor
-constexpr double kLeg = kThigh + kShank;
-
-// Anatomical angles of one joint (degrees): flexion (forward bend / dorsiflexion / knee
-// bend), abduction (away from the midline; for the trunk a lean to the left; for the
-// clavicle elevation) and twist (to the left for the trunk).
-struct Angles {
-  double flex = 0, abd = 0, twist = 0;
-};
-
-struct Pose {
-  std::array<Angles, kJointCount> a{};
-  Eigen::Vector3d root_offset = Eigen::Vector3d::Zero();  // m, heading frame (x left, y up, z forward)
-  double pitch = 0, roll = 0;                              // pelvis, degrees
-};
-
-// Channel values (Xrotation, Zrotation, Yrotation) of a joint from its anatomical angles.
-// Signs: a limb hanging down (−y) flexes forward under Rx(−θ); the knee bends back under
-// Rx(+θ); the trunk (pointing +y) bends forward under Rx(+θ) and leans left under Rz(−θ);
-// a left limb abducts (toward +x) under Rz(+θ), a right one under Rz(−θ).
-std::array<double, 3> channels_of(int j, const Angles& a) {
-  const bool left = std::string_view(kJoints[j].name).starts_with("left_");
-  const double side = left ? 1.0 : -1.0;
-  switch (j) {
-    case spine: case chest: case neck: case head:
-      return {a.flex, -a.abd, a.twist};
-    case l_knee: case r_knee:
-      return {a.flex, 0, 0};
-    case l_clavicle: case r_clavicle:  // elevation about z, protraction about y
-      return {0, side * a.abd, -side * a.flex};
-    default:  // hips, ankles, toes, shoulders, elbows, wrists
-      return {-a.flex, side * a.abd, side * a.twist};
-  }
-}
+using namespace humanoid;
 
 // ----------------------------------------------------------------- profiles
 
@@ -138,27 +61,12 @@ double hermite(const std::vector<Key>& k, double t) {
          (s3 - s2) * h * k[i + 1].m;
 }
 
-// Knee flexion (degrees) that lowers the pelvis by `drop` m with the thigh and shank
-// making equal angles with the vertical (feet stay under the hips, flat on the floor).
-double knee_for_drop(double drop) { return deg(2 * std::acos(std::clamp(1 - drop / kLeg, -1.0, 1.0))); }
-double drop_for_knee(double knee_deg) { return kLeg * (1 - std::cos(rad(knee_deg) / 2)); }
-
-// Flexes both legs by knee angle `kappa` (degrees): hips and ankles by half, pelvis down.
-void crouch(Pose& p, double kappa) {
-  for (int side = 0; side < 2; ++side) {
-    p.a[side ? r_hip : l_hip].flex += kappa / 2;
-    p.a[side ? r_knee : l_knee].flex += kappa;
-    p.a[side ? r_ankle : l_ankle].flex += kappa / 2;
-  }
-  p.root_offset.y() -= drop_for_knee(kappa);
-}
-
 // Stepping: phase φ = π f u (a gait cycle is two steps); the left foot swings while
 // sin φ > 0. Swing lift uses max(0, ±sin φ)², C1 where the feet change over.
 void stepping(Pose& p, const MotionSegment& s, double u, double e) {
   const double phase = kPi * s.step_frequency_hz * u, sn = std::sin(phase);
   const double swing_hip = deg(std::asin(std::min(1.0, s.step_length_m / (2 * kLeg))));  // ±, per step
-  const double lift_hip = deg(std::acos(std::clamp(1 - s.foot_lift_m / (2 * kThigh), -1.0, 1.0)));
+  const double lift_hip = hip_for_foot_lift(s.foot_lift_m);
   for (int side = 0; side < 2; ++side) {
     const double sgn = side ? -1.0 : 1.0;
     const double lift = std::pow(std::max(0.0, sgn * sn), 2);
@@ -230,6 +138,8 @@ Pose segment_pose(const MotionSegment& s, double u, double tau) {
       p.a[r_shoulder].flex += 0.8 * kappa;
       break;
     }
+    case SegmentType::random:  // RandomMotion::pose (random_motion.h)
+      break;
     case SegmentType::jump: {
       double a, b, land, c;
       check_jump(s, a, b, land, c);
@@ -271,6 +181,7 @@ const char* segment_type_name(SegmentType t) {
     case SegmentType::arm_swings: return "arm_swings";
     case SegmentType::squat: return "squat";
     case SegmentType::jump: return "jump";
+    case SegmentType::random: return "random";
   }
   return "?";
 }
@@ -331,9 +242,12 @@ void parse_spec_body(const StrictYaml& y, const YAML::Node& root, MotionSpec& sp
       s.type = SegmentType::jump;
       s.depth_m = 0.15;
       keys.insert(keys.end(), {"height", "depth"});
+    } else if (type == "random") {
+      s.type = SegmentType::random;
+      keys.insert(keys.end(), random_motion_keys().begin(), random_motion_keys().end());
     } else {
       y.fail_at(n["type"], where + ".type",
-                "unknown segment type '" + type + "' (expected idle, walk, turn, arm_swings, squat or jump)");
+                "unknown segment type '" + type + "' (expected idle, walk, turn, arm_swings, squat, jump or random)");
     }
     y.check_keys(n, where, keys);
     if (!n["duration"]) y.fail_at(n, where + ".duration", "missing key (seconds)");
@@ -356,6 +270,7 @@ void parse_spec_body(const StrictYaml& y, const YAML::Node& root, MotionSpec& sp
       if (s.mode != "alternate" && s.mode != "together" && s.mode != "sideways")
         y.fail_at(n["mode"], where + ".mode", "expected alternate, together or sideways, found '" + s.mode + "'");
     }
+    if (s.type == SegmentType::random) s.random = parse_random_motion_config(y, n, where);
     if (s.type == SegmentType::jump) {
       double a, b, land, c;
       try {
@@ -371,33 +286,6 @@ void parse_spec_body(const StrictYaml& y, const YAML::Node& root, MotionSpec& sp
 }  // namespace
 
 MotionSpec load_motion_spec(const std::string& path) { return parse_motion_spec(read_file_bytes(path), path); }
-
-BvhMotion generic_humanoid() {
-  BvhMotion m;
-  m.source = "generic_humanoid";
-  m.frame_time_s = 1.0 / 30;
-  int channel = 0;
-  for (int j = 0; j < kJointCount; ++j) {
-    const JointDef& d = kJoints[j];
-    BvhJoint b;
-    b.name = d.name;
-    b.parent = d.parent;
-    b.offset = Eigen::Vector3d(d.x, d.y, d.z);
-    b.end_site = d.end_site;
-    if (j == pelvis)
-      b.channels = {BvhChannel::x_position, BvhChannel::y_position, BvhChannel::z_position,
-                    BvhChannel::y_rotation, BvhChannel::x_rotation, BvhChannel::z_rotation};
-    else if (!d.end_site)
-      b.channels = {BvhChannel::x_rotation, BvhChannel::z_rotation, BvhChannel::y_rotation};
-    b.first_channel = channel;
-    channel += static_cast<int>(b.channels.size());
-    m.joints.push_back(std::move(b));
-  }
-  m.frames.resize(0, channel);
-  return m;
-}
-
-double generic_pelvis_height() { return kPelvisHeight; }
 
 BvhMotion generate_motion(const MotionSpec& spec, double fps) {
   if (spec.segments.empty()) fail(display_name(spec.file), ": no segments");
@@ -415,14 +303,17 @@ BvhMotion generate_motion(const MotionSpec& spec, double fps) {
   auto tau_of = [&](const MotionSegment& s) { return std::min(spec.transition_s, s.duration_s / 2); };
   auto speed_of = [](const MotionSegment& s) { return s.step_length_m * s.step_frequency_hz; };  // m/s
   auto forward = [](double heading_deg) { return Eigen::Vector2d(std::sin(rad(heading_deg)), std::cos(rad(heading_deg))); };
+  std::vector<std::optional<RandomMotion>> randoms(S);
   for (size_t i = 0; i < S; ++i) {
     const MotionSegment& s = spec.segments[i];
     if (s.type == SegmentType::jump) {
       double a, b, land, c;
       check_jump(s, a, b, land, c);
     }
+    if (s.type == SegmentType::random) randoms[i].emplace(s.random, s.duration_s);
     start[i + 1] = start[i] + s.duration_s;
-    heading[i + 1] = heading[i] + (s.type == SegmentType::turn ? s.angle_deg : 0);
+    heading[i + 1] = heading[i] + (s.type == SegmentType::turn ? s.angle_deg : 0) +
+                     (s.type == SegmentType::random ? randoms[i]->heading_deg(s.duration_s) : 0);
     position[i + 1] = position[i];
     if (s.type == SegmentType::walk)
       position[i + 1] += forward(heading[i]) * speed_of(s) * envelope_integral(s.duration_s, s.duration_s, tau_of(s));
@@ -434,26 +325,13 @@ BvhMotion generate_motion(const MotionSpec& spec, double fps) {
     while (i + 1 < S && t >= start[i + 1]) ++i;
     const MotionSegment& s = spec.segments[i];
     const double u = std::clamp(t - start[i], 0.0, s.duration_s), tau = tau_of(s);
-    const Pose p = segment_pose(s, u, tau);
+    const Pose p = s.type == SegmentType::random ? randoms[i]->pose(u) : segment_pose(s, u, tau);
     double yaw = heading[i];
+    if (s.type == SegmentType::random) yaw += randoms[i]->heading_deg(u);
     Eigen::Vector2d pos = position[i];
     if (s.type == SegmentType::turn) yaw += s.angle_deg * smoothstep(u / s.duration_s);
     if (s.type == SegmentType::walk) pos += forward(heading[i]) * speed_of(s) * envelope_integral(u, s.duration_s, tau);
-    // Root: the pose's offset is in the heading frame (x left, z forward).
-    const Eigen::Vector2d fwd = forward(yaw), left(fwd.y(), -fwd.x());
-    const Eigen::Vector2d offset = left * p.root_offset.x() + fwd * p.root_offset.z();
-    auto row = m.frames.row(f);
-    row(0) = pos.x() + offset.x();
-    row(1) = kPelvisHeight + p.root_offset.y();
-    row(2) = pos.y() + offset.y();
-    row(3) = yaw;
-    row(4) = p.pitch;
-    row(5) = p.roll;
-    for (int j = 1; j < kJointCount; ++j) {
-      if (kJoints[j].end_site) continue;
-      const std::array<double, 3> c = channels_of(j, p.a[j]);
-      for (int k = 0; k < 3; ++k) row(m.joints[j].first_channel + k) = c[k];
-    }
+    set_humanoid_frame(m, f, p, yaw, pos);
   }
   return m;
 }

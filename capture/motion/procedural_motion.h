@@ -1,29 +1,27 @@
 #pragma once
 // Procedural motions from a YAML spec (configs/motions/*.yaml, docs/MOTIONS.md): a
-// sequence of segments (idle, walk, turn, arm_swings, squat, jump), each lasting some
+// sequence of segments (idle, walk, turn, arm_swings, squat, jump, random), each lasting some
 // seconds, played on a generic humanoid and sampled at a frame rate. The result is a
 // BvhMotion of that humanoid, so that the same retargeting (and mapping format) that
 // brings motion capture onto a character brings these motions onto it too.
 //
-// The generic humanoid (metres, y up, facing +z, its left at +x, like CMU BVH): pelvis
-// (root: position + yaw/pitch/roll), spine, chest, neck, head, and per side <side>_hip,
-// _knee, _ankle, _toe, _clavicle, _shoulder, _elbow, _wrist, with end sites head_end,
-// <side>_toe_end and <side>_wrist_end; side is left or right. Joint angles are anatomical:
-// flexion, abduction and twist per joint (degrees), turned into BVH rotation channels
-// (Xrotation Zrotation Yrotation) with the signs of each side.
+// The generic humanoid and its anatomical joint angles: generic_humanoid.h.
 //
 // Smoothness: every segment's joint angles and root offsets start and end at the neutral
 // standing pose with zero velocity (envelopes and cosine/Hermite profiles), and the
 // heading and position carried from one segment to the next change with zero velocity
-// at the boundaries, so the motion is C1 across segments. Deterministic: no randomness.
+// at the boundaries, so the motion is C1 across segments. Deterministic: the `random`
+// segment (random_motion.h) draws from its own seed, the same on every platform.
 #include <string>
 #include <vector>
 
 #include "capture/motion/bvh.h"
+#include "capture/motion/generic_humanoid.h"
+#include "capture/motion/random_motion.h"
 
 namespace weft::capture {
 
-enum class SegmentType { idle, walk, turn, arm_swings, squat, jump };
+enum class SegmentType { idle, walk, turn, arm_swings, squat, jump, random };
 
 struct MotionSegment {
   SegmentType type = SegmentType::idle;
@@ -43,6 +41,8 @@ struct MotionSegment {
   double depth_m = 0.3;           // pelvis drop (squat; the jump's crouch)
   int repetitions = 1;            // squats in the segment
   double height_m = 0.2;          // jump: rise of the pelvis at the apex of the flight
+  // random: starts and ends at the neutral pose by itself (no transition envelope)
+  RandomMotionConfig random;
 };
 
 struct MotionSpec {
@@ -57,12 +57,6 @@ struct MotionSpec {
 MotionSpec load_motion_spec(const std::string& path);
 // Parses YAML text as if read from `name`; unknown keys are errors naming key and file.
 MotionSpec parse_motion_spec(const std::string& yaml_text, const std::string& name);
-
-// The generic humanoid with all channels at zero (standing, arms down), pelvis at its
-// standing height above the floor y = 0; no frames.
-BvhMotion generic_humanoid();
-// Standing height of the pelvis (m): the toe joints touch the floor.
-double generic_pelvis_height();
 
 // Samples the spec: frames at t = k/fps for k = 0 .. round(duration·fps) − 1 (fps <= 0:
 // the spec's). Throws weft::Error for segments that cannot be played (e.g. a jump too
