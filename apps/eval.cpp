@@ -37,10 +37,12 @@ void run_eval(const capture::EvaluationOptions& o, const std::string& out) {
                  e.gt_penetration_mean_mm / 10, e.gt_penetration_max_mm, 100 * e.gt_penetrating_fraction);
   spdlog::info("silhouette IoU over {} frames: AMVIoU {:.4f}, RVIoU {}, SVIoU {:.4f}", e.iou_frames, e.amv_iou,
                std::isfinite(e.rv_iou) ? fmt::format("{:.4f}", e.rv_iou) : "undefined (one view)", e.sv_iou);
-  spdlog::info("3D error: cloth {:.2f} mm mean, {:.2f} mm p95; body {:.2f} mm mean, {:.2f} mm p95; MPJPE {:.2f} mm; "
-               "pivot {:.2f} mm",
-               e.cloth_error_mean_mm, e.cloth_error_p95_mm, e.body_error_mean_mm, e.body_error_p95_mm, e.mpjpe_mm,
-               e.pivot_error_mm);
+  spdlog::info("3D error: cloth {:.2f} mm mean, {:.2f} mm p95, Chamfer {:.2f} mm; body {:.2f} mm mean, {:.2f} mm p95; "
+               "MPJPE {:.2f} mm ({:.2f} mm root-relative); pivot {:.2f} mm",
+               e.cloth_error_mean_mm, e.cloth_error_p95_mm, e.cloth_chamfer_mm, e.body_error_mean_mm,
+               e.body_error_p95_mm, e.mpjpe_mm, e.mpjpe_root_relative_mm, e.pivot_error_mm);
+  spdlog::info("root rotation error: median {:.1f}°, p95 {:.1f}°, {:.1f} % of frames above 45°",
+               e.root_rotation_median_deg, e.root_rotation_p95_deg, 100 * e.root_rotation_above_45);
   for (const std::string& n : e.notes) spdlog::info("note: {}", n);
   capture::write_evaluation_report(e, out);
   spdlog::info("report: {}", (std::filesystem::path(out) / "report.html").string());

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <numeric>
 
 #include "capture/character/skeletool_io.h"
@@ -179,7 +180,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   };
 
   std::vector<float> cloth_distances, body_distances;  // pooled over frames, for the 95th percentiles
-  MeasuredMean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv;
+  MeasuredMean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv, mpjpe_rr, chamfer;
+  std::vector<double> root_rotation_deg;
   MeasuredMean oob_n, oob_rel, gt_oob_n, gt_oob_rel, oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;
   double pen_sum = 0, gt_pen_sum = 0;
   int64_t inside = 0, gt_inside = 0, cloth_vertices = 0;
@@ -202,7 +204,19 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     CapturedMeshes m = read_captured_meshes(cap, f, ch);
     now.body = m.body.rowwise() + shift;
     if (e.has_cloth) now.cloth = m.cloth.rowwise() + shift;
-    const Vertices body25 = pose_character(ch, dofs.row(order[k]).transpose()).body25.rowwise() + shift;
+    const PosedCharacter pred_pose = pose_character(ch, dofs.row(order[k]).transpose());
+    const Vertices body25 = pred_pose.body25.rowwise() + shift;
+    {
+      const Eigen::Matrix3d r = pred_pose.joints[param.pivot_joint].linear().transpose() *
+                                gt_pose.joints[param.pivot_joint].linear();
+      fe.root_rotation_error_deg = Eigen::AngleAxisd(r).angle() * 180 / std::numbers::pi;
+      root_rotation_deg.push_back(fe.root_rotation_error_deg);
+      const Eigen::RowVector3d pred_root = pred_pose.joints[param.pivot_joint].translation().transpose(),
+                               gt_root = gt_pivot.transpose();
+      fe.mpjpe_root_relative_mm = mean_joint_error_mm(pred_pose.body25.rowwise() - pred_root,
+                                                      gt_pose.body25.rowwise() - gt_root, mpu);
+      mpjpe_rr.add(fe.mpjpe_root_relative_mm);
+    }
     now.gt_body = read_gt_mesh(info, "body", f, int(ch.body.mesh.V.rows()), ch);
     if (e.has_cloth) now.gt_cloth = read_gt_mesh(info, "cloth", f, int(ch.cloth->mesh.V.rows()), ch);
 
@@ -222,6 +236,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
         fe.cloth_error_p95_mm = quantile(cd, 0.95);
         cloth_distances.insert(cloth_distances.end(), cd.begin(), cd.end());
         cloth_err.add(fe.cloth_error_mean_mm);
+        fe.cloth_chamfer_mm = chamfer_distance_mm(now.cloth, now.gt_cloth, ch.cloth->mesh.F, mpu);
+        chamfer.add(fe.cloth_chamfer_mm);
       }
 
       // Penetration, of the prediction and of the ground truth.
@@ -302,7 +318,16 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   e.body_error_mean_mm = body_err.value();
   e.body_error_p95_mm = quantile(std::vector<double>(body_distances.begin(), body_distances.end()), 0.95);
   e.mpjpe_mm = mpjpe.value();
+  e.mpjpe_root_relative_mm = mpjpe_rr.value();
+  if (!root_rotation_deg.empty()) {
+    e.root_rotation_median_deg = quantile(root_rotation_deg, 0.5);
+    e.root_rotation_p95_deg = quantile(root_rotation_deg, 0.95);
+    e.root_rotation_above_45 =
+        double(std::count_if(root_rotation_deg.begin(), root_rotation_deg.end(), [](double a) { return a > 45; })) /
+        root_rotation_deg.size();
+  }
   if (e.has_cloth) {
+    e.cloth_chamfer_mm = chamfer.value();
     e.cloth_error_mean_mm = cloth_err.value();
     e.cloth_error_p95_mm = quantile(std::vector<double>(cloth_distances.begin(), cloth_distances.end()), 0.95);
     e.penetration_mean_mm = inside ? pen_sum / inside : 0.0;

@@ -10,9 +10,12 @@
 //   max, and the fraction of cloth vertices inside;
 // - silhouette IoU of the rendered body + cloth against the dataset's masks on every N-th
 //   frame: over all views (AMVIoU), all but the input view (RVIoU), the input view (SVIoU);
-// - 3D error: cloth and body vertex distance (mean and 95th percentile, mm), MPJPE over
-//   the mapped BODY_25 keypoints of the posed skeleton (mm), the pivot joint's distance
-//   (the global translation's error, mm).
+// - 3D error: cloth and body vertex distance (mean and 95th percentile, mm), the cloth's
+//   Chamfer distance (a surface distance that a garment turned about its axis does not
+//   inflate), MPJPE over the mapped BODY_25 keypoints of the posed skeleton (mm), also
+//   root-relative (both pivots at the origin), the pivot joint's distance (the global
+//   translation's error, mm) and the root orientation's error (the pivot joint's global
+//   rotation, degrees: median, p95 and the fraction of frames above 45°).
 // With gt_translation every predicted frame (meshes and joints) is first moved by the
 // ground truth's pivot minus the predicted pivot (the paper applies the true global
 // translation to every method); every metric then measures the moved frames. The ground
@@ -48,6 +51,9 @@ struct FrameEvaluation {
   double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured;
   double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
   double mpjpe_mm = kNotMeasured;
+  double mpjpe_root_relative_mm = kNotMeasured;  // both skeletons' pivots at the origin
+  double root_rotation_error_deg = kNotMeasured;  // the pivot joint's global rotation, geodesic angle
+  double cloth_chamfer_mm = kNotMeasured;         // symmetric surface distance (frame_measures.h)
   // Penetration: mean over the vertices inside (0 when none is), max, and how many.
   double penetration_mean_mm = kNotMeasured, penetration_max_mm = kNotMeasured;
   double penetration_depth_sum_mm = 0;
@@ -104,6 +110,11 @@ struct CaptureEvaluation {
   double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured;
   double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
   double mpjpe_mm = kNotMeasured, pivot_error_mm = kNotMeasured;
+  double mpjpe_root_relative_mm = kNotMeasured, cloth_chamfer_mm = kNotMeasured;
+  // The root (pivot joint) orientation's error over frames: median, 95th percentile, and
+  // the fraction of frames above 45° (front/back or side confusions).
+  double root_rotation_median_deg = kNotMeasured, root_rotation_p95_deg = kNotMeasured,
+         root_rotation_above_45 = kNotMeasured;
   double seconds = 0;
 
   std::vector<EvaluationOverlay> overlays;

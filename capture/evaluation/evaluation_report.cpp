@@ -105,8 +105,13 @@ std::string CaptureEvaluation::to_json() const {
   s["iou"] = {{"frames", iou_frames}, {"amv", amv_iou}, {"rv", rv_iou}, {"sv", sv_iou}};
   s["cloth_error_mm"] = {{"mean", cloth_error_mean_mm}, {"p95", cloth_error_p95_mm}};
   s["body_error_mm"] = {{"mean", body_error_mean_mm}, {"p95", body_error_p95_mm}};
+  s["cloth_chamfer_mm"] = cloth_chamfer_mm;
   s["mpjpe_mm"] = mpjpe_mm;
+  s["mpjpe_root_relative_mm"] = mpjpe_root_relative_mm;
   s["pivot_error_mm"] = pivot_error_mm;
+  s["root_rotation_deg"] = {{"median", root_rotation_median_deg},
+                            {"p95", root_rotation_p95_deg},
+                            {"fraction_above_45", root_rotation_above_45}};
   json& p = j["per_frame"];
   std::vector<int> ids;
   json shifts = json::array(), ious = json::array();
@@ -123,6 +128,9 @@ std::string CaptureEvaluation::to_json() const {
   p["body_error_mean_mm"] = column(*this, [](const auto& f) { return f.body_error_mean_mm; });
   p["body_error_p95_mm"] = column(*this, [](const auto& f) { return f.body_error_p95_mm; });
   p["mpjpe_mm"] = column(*this, [](const auto& f) { return f.mpjpe_mm; });
+  p["mpjpe_root_relative_mm"] = column(*this, [](const auto& f) { return f.mpjpe_root_relative_mm; });
+  p["root_rotation_error_deg"] = column(*this, [](const auto& f) { return f.root_rotation_error_deg; });
+  p["cloth_chamfer_mm"] = column(*this, [](const auto& f) { return f.cloth_chamfer_mm; });
   p["penetration_mean_mm"] = column(*this, [](const auto& f) { return f.penetration_mean_mm; });
   p["penetration_max_mm"] = column(*this, [](const auto& f) { return f.penetration_max_mm; });
   p["penetrating_vertices"] = column(*this, [](const auto& f) { return double(f.penetrating_vertices); });
@@ -293,7 +301,12 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   row("cloth vertex error, 95th percentile", num(e.cloth_error_p95_mm, 2), "", "mm");
   row("body vertex error, mean", num(e.body_error_mean_mm, 2), "", "mm");
   row("body vertex error, 95th percentile", num(e.body_error_p95_mm, 2), "", "mm");
+  row("cloth Chamfer distance", num(e.cloth_chamfer_mm, 2), "", "mm");
   row("MPJPE (mapped BODY_25 joints)", num(e.mpjpe_mm, 2), "", "mm");
+  row("MPJPE, root-relative", num(e.mpjpe_root_relative_mm, 2), "", "mm");
+  row("root rotation error, median", num(e.root_rotation_median_deg, 2), "", "°");
+  row("root rotation error, 95th percentile", num(e.root_rotation_p95_deg, 2), "", "°");
+  row("frames with the root rotation off by more than 45°", num(100 * e.root_rotation_above_45, 2), "", "%");
   row("global translation error (pivot joint, before any shift)", num(e.pivot_error_mm, 2), "", "mm");
   h += "</table>\n<p>Definitions: docs/EVALUATION.md. The ground-truth column measures the dataset's own meshes "
        "the same way: the floor the data allows.</p>\n";

@@ -4,6 +4,8 @@
 // prediction moved sideways is wrong by the move unless --gt-translation takes it back;
 // the report holds every metric; bad capture folders are errors naming the file.
 #include <gtest/gtest.h>
+
+#include <numbers>
 #include <fmt/format.h>
 #include <sys/wait.h>
 
@@ -40,9 +42,12 @@ fs::path tiny() { return weft::capture::testing::tiny_dataset(); }
 
 // A capture folder holding the dataset's ground truth for `frames`, every mesh, joint and
 // pivot moved by `offset` (character units).
+// `root_turn_rad` is added to the root chain's rotation about y (the meshes stay);
+// `cloth_turn_rad` turns the cloth about the vertical through its centroid.
 fs::path perfect_capture(const std::string& name, const std::vector<int>& frames,
                          const Eigen::Vector3d& offset = Eigen::Vector3d::Zero(),
-                         const Eigen::Vector3d& cloth_offset = Eigen::Vector3d::Zero()) {
+                         const Eigen::Vector3d& cloth_offset = Eigen::Vector3d::Zero(), double root_turn_rad = 0,
+                         double cloth_turn_rad = 0) {
   const DatasetInfo info = read_dataset_info(tiny().string());
   const Character ch = load_character(info.character);
   const Motion gt = read_motion((tiny() / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
@@ -79,6 +84,11 @@ fs::path perfect_capture(const std::string& name, const std::vector<int>& frames
       for (size_t k = 0; k < param.root_dofs.size(); ++k) dofs[param.root_dofs[k]] += step[k];
       EXPECT_LT((pivot_of(dofs) - before - offset).norm(), 1e-9);
     }
+    if (root_turn_rad != 0) {
+      const int ry = ch.skeleton.dof_index("hips_ry");
+      EXPECT_GE(ry, 0);
+      dofs[ry] += root_turn_rad;
+    }
     m.dofs.row(i) = dofs.transpose();
     const Eigen::Vector3d pivot = pivot_of(dofs);
     j["frames"].push_back(nlohmann::json::object({{"id", f},
@@ -88,7 +98,14 @@ fs::path perfect_capture(const std::string& name, const std::vector<int>& frames
     for (const char* part : {"body", "cloth"}) {
       TriangleMesh mesh = read_ply((tiny() / "gt" / fmt::format("{}_{:04d}.ply", part, f)).string());
       mesh.V.rowwise() += offset.transpose();
-      if (std::string(part) == "cloth") mesh.V.rowwise() += cloth_offset.transpose();
+      if (std::string(part) == "cloth") {
+        mesh.V.rowwise() += cloth_offset.transpose();
+        if (cloth_turn_rad != 0) {
+          const Eigen::RowVector3d c = mesh.V.colwise().mean();
+          const Eigen::Matrix3d turn = Eigen::AngleAxisd(cloth_turn_rad, Eigen::Vector3d::UnitY()).toRotationMatrix();
+          mesh.V = ((mesh.V.rowwise() - c) * turn.transpose()).rowwise() + c;
+        }
+      }
       write_ply((dir / "meshes" / fmt::format("{}_{:04d}.ply", part, f)).string(), mesh);
     }
   }
@@ -176,6 +193,10 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
   EXPECT_TRUE(s["cloth_error_mm"]["p95"].is_number());
   EXPECT_TRUE(s["body_error_mm"]["mean"].is_number());
   EXPECT_TRUE(s["mpjpe_mm"].is_number());
+  EXPECT_TRUE(s["mpjpe_root_relative_mm"].is_number());
+  EXPECT_TRUE(s["cloth_chamfer_mm"].is_number());
+  for (const char* key : {"median", "p95", "fraction_above_45"}) EXPECT_TRUE(s["root_rotation_deg"][key].is_number()) << key;
+  EXPECT_TRUE(j["per_frame"]["root_rotation_error_deg"][0].is_number());
   EXPECT_EQ(j["per_frame"]["id"].size(), 6u);
   EXPECT_TRUE(j["per_frame"]["oob_force_mean_n"][0].is_null());  // frame 0 has no predecessors
   EXPECT_TRUE(j["per_frame"]["oob_force_mean_n"][2].is_number());
@@ -207,6 +228,28 @@ TEST(CaptureEvaluationIntegration, GroundTruthTranslationTakesBackAGlobalShift) 
   EXPECT_NEAR(back.mpjpe_mm, 0.0, 1e-6);
   EXPECT_NEAR(back.pivot_error_mm, shift_mm, 1e-6);  // the error the shift took away
   EXPECT_GT(back.amv_iou, 0.99);
+}
+
+TEST(CaptureEvaluationIntegration, RootRotationAndChamferTellATurnedPoseAndATurnedSkirt) {
+  const CaptureEvaluation perfect = evaluate_capture(options(perfect_capture("perfect_turn", {1, 2, 3})));
+  EXPECT_NEAR(perfect.root_rotation_median_deg, 0.0, 1e-6);
+  EXPECT_EQ(perfect.root_rotation_above_45, 0.0);
+  EXPECT_NEAR(perfect.mpjpe_root_relative_mm, 0.0, 1e-6);
+  EXPECT_NEAR(perfect.cloth_chamfer_mm, 0.0, 1e-9);
+  // The root turned by 1 rad about y: a 57.3° root error in every frame, which a
+  // root-relative MPJPE sees too; a skirt turned by 0.2 rad about its axis: a large vertex
+  // error but a small surface (Chamfer) distance.
+  const CaptureEvaluation turned = evaluate_capture(options(perfect_capture("turned", {1, 2, 3}, {}, {}, 1.0, 0.2)));
+  EXPECT_NEAR(turned.root_rotation_median_deg, 180 / std::numbers::pi, 1e-6);
+  EXPECT_NEAR(turned.root_rotation_p95_deg, 180 / std::numbers::pi, 1e-6);
+  EXPECT_EQ(turned.root_rotation_above_45, 1.0);
+  EXPECT_GT(turned.mpjpe_root_relative_mm, 100);
+  EXPECT_NEAR(turned.body_error_mean_mm, 0.0, 1e-9);  // the meshes did not move
+  EXPECT_GT(turned.cloth_error_mean_mm, 20);
+  EXPECT_LT(turned.cloth_chamfer_mm, 0.5 * turned.cloth_error_mean_mm);
+  std::printf("skirt turned by 0.2 rad: vertex error %.2f mm, Chamfer %.2f mm; root turned 1 rad: MPJPE root-relative "
+              "%.1f mm\n",
+              turned.cloth_error_mean_mm, turned.cloth_chamfer_mm, turned.mpjpe_root_relative_mm);
 }
 
 TEST(CaptureEvaluationIntegration, SkirtMovedIntoTheBodyPenetrates) {
