@@ -23,6 +23,10 @@ packages=(
   # run bench/resnet_torch_parity.py with Debian's PyTorch and torchvision. weft itself
   # never needs Python.
   python3 python3-torch python3-torchvision
+  # Photographs behind the subject of the synthetic studio's in-the-wild takes
+  # (render.background: photos): mate-backgrounds' nature photos in
+  # /usr/share/backgrounds/mate/nature (GPL-2+), read from there, never copied.
+  mate-backgrounds
 )
 missing=()
 for p in "${packages[@]}"; do

