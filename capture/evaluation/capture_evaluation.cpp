@@ -207,9 +207,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     const PosedCharacter pred_pose = pose_character(ch, dofs.row(order[k]).transpose());
     const Vertices body25 = pred_pose.body25.rowwise() + shift;
     {
-      const Eigen::Matrix3d r = pred_pose.joints[param.pivot_joint].linear().transpose() *
-                                gt_pose.joints[param.pivot_joint].linear();
-      fe.root_rotation_error_deg = Eigen::AngleAxisd(r).angle() * 180 / std::numbers::pi;
+      fe.root_rotation_error_deg = rotation_error_deg(pred_pose.joints[param.pivot_joint].linear(),
+                                                      gt_pose.joints[param.pivot_joint].linear());
       root_rotation_deg.push_back(fe.root_rotation_error_deg);
       const Eigen::RowVector3d pred_root = pred_pose.joints[param.pivot_joint].translation().transpose(),
                                gt_root = gt_pivot.transpose();
@@ -319,13 +318,9 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   e.body_error_p95_mm = quantile(std::vector<double>(body_distances.begin(), body_distances.end()), 0.95);
   e.mpjpe_mm = mpjpe.value();
   e.mpjpe_root_relative_mm = mpjpe_rr.value();
-  if (!root_rotation_deg.empty()) {
-    e.root_rotation_median_deg = quantile(root_rotation_deg, 0.5);
-    e.root_rotation_p95_deg = quantile(root_rotation_deg, 0.95);
-    e.root_rotation_above_45 =
-        double(std::count_if(root_rotation_deg.begin(), root_rotation_deg.end(), [](double a) { return a > 45; })) /
-        root_rotation_deg.size();
-  }
+  const RotationErrorSummary rotation = summarize_rotation_errors(root_rotation_deg);
+  e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
+  e.root_rotation_above_45 = rotation.above_45;
   if (e.has_cloth) {
     e.cloth_chamfer_mm = chamfer.value();
     e.cloth_error_mean_mm = cloth_err.value();

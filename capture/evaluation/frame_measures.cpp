@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <numbers>
 #include <cmath>
 #include <limits>
 
@@ -113,6 +114,20 @@ std::vector<double> silhouette_ious(const Character& ch, const Vertices& body, c
     iou[k] = rendered_silhouette_iou(cameras[k], ch, body, cloth, masks[k]);
   });
   return iou;
+}
+
+double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth) {
+  return Eigen::AngleAxisd(predicted.transpose() * truth).angle() * 180 / std::numbers::pi;
+}
+
+RotationErrorSummary summarize_rotation_errors(const std::vector<double>& errors_deg) {
+  RotationErrorSummary s;
+  if (errors_deg.empty()) return s;
+  s.median_deg = quantile(errors_deg, 0.5);
+  s.p95_deg = quantile(errors_deg, 0.95);
+  s.above_45 = double(std::count_if(errors_deg.begin(), errors_deg.end(), [](double a) { return a > 45; })) /
+               errors_deg.size();
+  return s;
 }
 
 }  // namespace weft::capture

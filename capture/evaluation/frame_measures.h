@@ -47,6 +47,16 @@ Penetration cloth_penetration(const Character& character, const Vertices& body, 
 std::vector<double> cloth_signed_distances_mm(const Character& character, const Vertices& body,
                                               const Vertices& cloth);
 
+// The geodesic angle (degrees, 0..180) between two rotations: the root orientation's error.
+double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
+
+// Root orientation errors over predictions: the median, the 95th percentile and the
+// fraction above 45° (front/back and side confusions); NaN for none.
+struct RotationErrorSummary {
+  double median_deg = kNotMeasured, p95_deg = kNotMeasured, above_45 = kNotMeasured;
+};
+RotationErrorSummary summarize_rotation_errors(const std::vector<double>& errors_deg);
+
 // Symmetric Chamfer distance (mm) of two meshes with the same faces F (a prediction and
 // its ground truth): the mean distance of a's vertices to b's surface and of b's vertices
 // to a's, averaged. Unlike the per-vertex error it does not count a garment that slid

@@ -52,6 +52,9 @@ std::string SplitEvaluation::to_json() const {
   j["joint_error_mm"] = joint_error_mm;
   j["joint_error_root_relative_mm"] = joint_error_root_relative_mm;
   j["root_rotation_error_deg"] = root_rotation_error_deg;
+  j["root_rotation_median_deg"] = root_rotation_median_deg;
+  j["root_rotation_p95_deg"] = root_rotation_p95_deg;
+  j["root_rotation_above_45"] = root_rotation_above_45;
   j["mean_pose_joint_error_root_relative_mm"] = mean_pose_joint_error_root_relative_mm;
   j["silhouette_iou"] = silhouette_iou;
   j["template_silhouette_iou"] = template_silhouette_iou;
@@ -78,6 +81,7 @@ std::string SplitEvaluation::to_json() const {
     rows.push_back({{"frame", f.frame},
                     {"view", f.view},
                     {"joint_error_mm", f.joint_error_mm},
+                    {"root_rotation_error_deg", f.root_rotation_error_deg},
                     {"cloth_error_mm", f.cloth_error_mm},
                     {"chamfer_mm", f.chamfer_mm},
                     {"body_error_mm", f.body_error_mm},
@@ -182,6 +186,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.oracle_pose = cfg.oracle_pose;
   e.frames = int(frames.size());
   e.views = V;
+  std::vector<double> rotation_errors;
   MeasuredMean rotation_err, kp, joint, joint_aligned, iou, tmpl_iou, cloth_err, chamfer, body_err, pen, pen_all, inside;
   MeasuredMean inertia, elastic, collision, friction;
   std::vector<double> oob_values, oob_rel_values, oob_outside_values;
@@ -230,7 +235,9 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
           Eigen::Matrix3d R_pred;
           for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) R_pred(r, c) = p.rotation.data<float>()[9 * b + 3 * r + c];
-          rotation_err.add(Eigen::AngleAxisd(R_pred.transpose() * gt_rotation[f]).angle() * 180 / M_PI);
+          fe.root_rotation_error_deg = rotation_error_deg(R_pred, gt_rotation[f]);
+          rotation_err.add(fe.root_rotation_error_deg);
+          rotation_errors.push_back(fe.root_rotation_error_deg);
         }
         MeasuredMean frame_joint;
         for (int m = 0; m < kBody25Count; ++m) {
@@ -315,6 +322,9 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.joint_error_mm = joint.value();
   e.joint_error_root_relative_mm = joint_aligned.value();
   e.root_rotation_error_deg = rotation_err.value();
+  const RotationErrorSummary rotation = summarize_rotation_errors(rotation_errors);
+  e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
+  e.root_rotation_above_45 = rotation.above_45;
   e.mean_pose_joint_error_root_relative_mm = mean_joint_aligned.value();
   e.silhouette_iou = iou.value();
   e.template_silhouette_iou = tmpl_iou.value();

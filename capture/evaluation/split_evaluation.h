@@ -39,6 +39,7 @@ namespace weft::capture {
 // One prediction's measures (NaN where not measured).
 struct SplitFrameEvaluation {
   int frame = 0, view = 0;
+  double root_rotation_error_deg = kNotMeasured;  // the pivot joint's global rotation (degrees)
   double joint_error_mm = kNotMeasured, cloth_error_mm = kNotMeasured, chamfer_mm = kNotMeasured, body_error_mm = kNotMeasured, iou = kNotMeasured;
   double penetration_mean_all_mm = kNotMeasured;  // mean depth over every cloth vertex (0 outside)
   double penetrating_fraction = kNotMeasured;
@@ -54,7 +55,9 @@ struct SplitEvaluation {
   int frames = 0, views = 0, predictions = 0;
   double keypoint_error_px = kNotMeasured, mean_pose_keypoint_error_px = kNotMeasured;
   double joint_error_mm = kNotMeasured, joint_error_root_relative_mm = kNotMeasured, mean_pose_joint_error_root_relative_mm = kNotMeasured;
-  double root_rotation_error_deg = kNotMeasured;
+  double root_rotation_error_deg = kNotMeasured;  // mean
+  double root_rotation_median_deg = kNotMeasured, root_rotation_p95_deg = kNotMeasured,
+         root_rotation_above_45 = kNotMeasured;  // the fraction of predictions above 45°
   double silhouette_iou = kNotMeasured, template_silhouette_iou = kNotMeasured;
   double cloth_error_mm = kNotMeasured, chamfer_mm = kNotMeasured, template_cloth_error_mm = kNotMeasured,
          skinned_true_pose_cloth_error_mm = kNotMeasured, body_error_mm = kNotMeasured;
