@@ -56,15 +56,19 @@ def main():
         ("SVIoU (%)", ("iou", "sv"), None),
         ("Cloth vertex error, mean (mm)", ("cloth_error_mm", "mean"), None),
         ("Cloth vertex error, 95th percentile (mm)", ("cloth_error_mm", "p95"), None),
+        ("Cloth Chamfer distance (mm)", ("cloth_chamfer_mm",), None),
         ("Body vertex error, mean (mm)", ("body_error_mm", "mean"), None),
         ("MPJPE (mm)", ("mpjpe_mm",), None),
+        ("MPJPE, root-relative (mm)", ("mpjpe_root_relative_mm",), None),
+        ("Root rotation error, median (°)", ("root_rotation_deg", "median"), None),
+        ("Frames with the root rotation off by more than 45° (%)", ("root_rotation_deg", "fraction_above_45"), None),
     ]
     print(f"### {a.title}\n")
     print("| metric | ARAP-only (DeepCap-like) | physics-aware | ratio physics / ARAP | paper's ratio |")
     print("|---|---|---|---|---|")
     for label, keys, paper in rows:
         pv, dv = get(p, *keys), get(d, *keys)
-        scale = 100.0 if keys[0] in ("iou",) or keys[-1] == "fraction_inside" else 1.0
+        scale = 100.0 if keys[0] in ("iou",) or keys[-1] in ("fraction_inside", "fraction_above_45") else 1.0
         pv = pv * scale if pv is not None else None
         dv = dv * scale if dv is not None else None
         if keys[0] == "iou":

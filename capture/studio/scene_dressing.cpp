@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "capture/io/portable_random.h"
+#include "capture/render/photos.h"
 #include "capture/io/strict_yaml.h"
 #include "graph/error.h"
 
@@ -65,27 +66,6 @@ Lighting draw_lighting(const StudioLightingConfig& c, uint64_t seed, int clip) {
   return l;
 }
 
-std::vector<std::string> list_photos(const std::string& path, const std::string& key) {
-  std::vector<std::string> out;
-  auto is_image = [](const fs::path& p) {
-    std::string ext = p.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
-    return ext == ".jpg" || ext == ".jpeg" || ext == ".png";
-  };
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) {
-    for (const auto& e : fs::directory_iterator(path, ec))
-      if (e.is_regular_file() && is_image(e.path())) out.push_back(e.path().string());
-    std::sort(out.begin(), out.end());
-  } else if (fs::is_regular_file(path, ec) && is_image(path)) {
-    out.push_back(path);
-  }
-  if (out.empty())
-    fail(key, ": no .jpg, .jpeg or .png photo at ", path,
-         " (the nature photos come with Debian's mate-backgrounds: scripts/setup.sh installs it)");
-  return out;
-}
-
 cv::Mat draw_photo_background(const std::vector<std::string>& photos, int width, int height, uint64_t seed, int clip,
                               int view) {
   WEFT_CHECK(!photos.empty(), "photo background: no photos to draw from");
@@ -94,17 +74,9 @@ cv::Mat draw_photo_background(const std::vector<std::string>& photos, int width,
   const size_t pick = std::min(photos.size() - 1, static_cast<size_t>(rng.uniform() * photos.size()));
   const cv::Mat photo = cv::imread(photos[pick], cv::IMREAD_COLOR);
   WEFT_CHECK(!photo.empty(), photos[pick], ": cannot read this photo as an image");
-  // The frame spans a fraction of the photo's extent along its tighter axis.
-  const double fill = rng.uniform(0.5, 1.0);
-  const double scale = std::min(photo.cols / double(width), photo.rows / double(height)) * fill;
-  const int cw = std::max(1, std::min(photo.cols, static_cast<int>(std::lround(width * scale))));
-  const int ch = std::max(1, std::min(photo.rows, static_cast<int>(std::lround(height * scale))));
-  const int x = static_cast<int>(rng.uniform() * (photo.cols - cw + 1));
-  const int y = static_cast<int>(rng.uniform() * (photo.rows - ch + 1));
-  cv::Mat out;
-  cv::resize(photo(cv::Rect(std::min(x, photo.cols - cw), std::min(y, photo.rows - ch), cw, ch)), out,
-             cv::Size(width, height), 0, 0, cv::INTER_AREA);
-  return out;
+  // The frame spans 50–100 % of the photo along its tighter axis.
+  const double fill = rng.uniform(0.5, 1.0), x = rng.uniform(), y = rng.uniform();
+  return photo_crop(photo, width, height, fill, x, y);
 }
 
 }  // namespace weft::capture

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "capture/render/photos.h"
 #include "capture/render/renderer.h"
 
 namespace YAML {
@@ -38,10 +39,6 @@ StudioLightingConfig parse_studio_lighting(const StrictYaml& yaml, const YAML::N
 
 // The lighting of clip `clip` (y up, metres or any unit: only directions matter).
 Lighting draw_lighting(const StudioLightingConfig& config, uint64_t seed, int clip);
-
-// The image files of `photos`: a folder's .jpg/.jpeg/.png (sorted by name), or one file.
-// Errors name `key` and the path when it holds no image.
-std::vector<std::string> list_photos(const std::string& path, const std::string& key);
 
 // A width×height crop of one of `photos` (CV_8UC3), drawn for (seed, clip, view): the
 // photo is scaled so the frame covers 50–100 % of its shorter side, and the crop's place is

@@ -243,9 +243,10 @@ void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& n, KeypointNois
 }
 
 void parse_splits(const StrictYaml& y, const YAML::Node& n, SynthConfig& c) {
-  y.check_keys(n, "splits.", {"val", "test"});
+  y.check_keys(n, "splits.", {"val", "test", "place"});
   if (n["val"]) c.val_fraction = y.number(n["val"], "splits.val", 0, 1);
   if (n["test"]) c.test_fraction = y.number(n["test"], "splits.test", 0, 1);
+  if (n["place"]) c.split_place = y.number(n["place"], "splits.place", 0, 1);
   if (c.val_fraction + c.test_fraction > 1) y.fail_at(n, "splits", "val + test must not exceed 1");
 }
 
@@ -422,6 +423,23 @@ std::string yaml_int_list(const std::vector<int>& v) {
 }
 
 }  // namespace
+
+ClipSplit split_clip(int first, int end, double val_fraction, double test_fraction, double place) {
+  WEFT_CHECK(first <= end && val_fraction >= 0 && test_fraction >= 0 && val_fraction + test_fraction <= 1 &&
+                 place >= 0 && place <= 1,
+             "split_clip: bad arguments");
+  const int n = end - first;
+  const int n_test = static_cast<int>(std::floor(test_fraction * n));
+  const int n_val = static_cast<int>(std::floor(val_fraction * n));
+  const int held_out = first + static_cast<int>(std::lround(place * (n - n_val - n_test)));
+  ClipSplit s;
+  for (int f = first; f < end; ++f) {
+    if (f >= held_out + n_val && f < held_out + n_val + n_test) s.test.push_back(f);
+    else if (f >= held_out && f < held_out + n_val) s.val.push_back(f);
+    else s.train.push_back(f);
+  }
+  return s;
+}
 
 std::string dataset_frame_name(int frame) {
   char buf[16];
@@ -737,22 +755,19 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
     write_ply((out / "gt" / ("cloth_" + dataset_frame_name(f) + ".ply")).string(), with_vertices(cloth_mesh, cloth[f]));
   }
 
-  // Splits: contiguous blocks in time at the end of each clip (train, then val, then test),
-  // so every split sees every motion; failed frames left out.
+  // Splits: in each clip one held-out stretch (val, then test) placed at `split_place` of
+  // the clip (1: its end; 0.5: its middle), the rest train, so every split sees every
+  // motion; failed frames left out.
   std::vector<int> failed;
+  for (int f = 0; f < frames; ++f)
+    if (summary.reports[f].failed) failed.push_back(f);
   for (int k = 0; k < clips; ++k) {
-    const int first = segments[k], end = segment_end(k), n = end - first;
-    const int n_test = static_cast<int>(std::floor(cfg.test_fraction * n));
-    const int n_val = static_cast<int>(std::floor(cfg.val_fraction * n));
-    for (int f = first; f < end; ++f) {
-      if (summary.reports[f].failed) {
-        failed.push_back(f);
-        continue;
-      }
-      if (f >= end - n_test) summary.test.push_back(f);
-      else if (f >= end - n_test - n_val) summary.val.push_back(f);
-      else summary.train.push_back(f);
-    }
+    const ClipSplit split = split_clip(segments[k], segment_end(k), cfg.val_fraction, cfg.test_fraction, cfg.split_place);
+    const auto keep = [&](const std::vector<int>& from, std::vector<int>& to) {
+      for (int f : from)
+        if (!summary.reports[f].failed) to.push_back(f);
+    };
+    keep(split.train, summary.train), keep(split.val, summary.val), keep(split.test, summary.test);
   }
 
   // metrics.json: deterministic (no wall times; those go to timing.json).

@@ -91,7 +91,8 @@ struct SynthConfig {
   SynthCameraConfig cameras;
   SynthRenderConfig render;
   KeypointNoiseConfig keypoints;
-  double val_fraction = 0.1, test_fraction = 0.1;  // contiguous blocks at the end of each clip
+  double val_fraction = 0.1, test_fraction = 0.1;  // one held-out stretch per clip: val, then test
+  double split_place = 1;  // where that stretch sits in each clip: 0 its start, 0.5 the middle, 1 the end
 
   double fps() const { return motions.front().fps; }  // the dataset's frame rate
   int frames() const;                                 // all clips' frames
@@ -139,6 +140,14 @@ struct SynthProgress {
 // each clip; one clip gives the files a single-clip config always gave.
 SynthSummary synthesize_dataset(const SynthConfig& config, const std::string& out_dir,
                                 const std::function<void(const SynthProgress&)>& progress = {});
+
+// The splits of one clip's frames [first, end): floor(val_fraction · n) val frames then
+// floor(test_fraction · n) test frames in one held-out stretch that starts at
+// first + round(place · (n − held-out frames)), the rest train; each list ascending.
+struct ClipSplit {
+  std::vector<int> train, val, test;
+};
+ClipSplit split_clip(int first, int end, double val_fraction, double test_fraction, double place);
 
 // File names of the layout (docs/DATASET.md).
 std::string dataset_frame_name(int frame);  // "0007"

@@ -163,3 +163,25 @@ TEST(SynthConfig, MotionsErrorsNameTheClip) {
                                        "bad.yaml"); },
                {"bad.yaml", "motion", "missing"});
 }
+
+TEST(SynthConfig, HeldOutStretchSitsWhereSplitsPlaceSaysInEachClip) {
+  // 1 (the default): at the clip's end, as before; 0.5: a stretch from the middle of the motion.
+  const ClipSplit end = split_clip(10, 30, 0.1, 0.2, 1.0);
+  EXPECT_EQ(end.val, (std::vector<int>{24, 25}));
+  EXPECT_EQ(end.test, (std::vector<int>{26, 27, 28, 29}));
+  EXPECT_EQ(end.train.size(), 14u);
+  EXPECT_EQ(end.train.back(), 23);
+  const ClipSplit mid = split_clip(10, 30, 0.1, 0.2, 0.5);
+  EXPECT_EQ(mid.val, (std::vector<int>{17, 18}));
+  EXPECT_EQ(mid.test, (std::vector<int>{19, 20, 21, 22}));
+  EXPECT_EQ(mid.train.front(), 10);
+  EXPECT_EQ(mid.train.back(), 29);
+  EXPECT_EQ(mid.train.size(), 14u);
+  const ClipSplit start = split_clip(0, 10, 0.0, 0.3, 0.0);
+  EXPECT_EQ(start.test, (std::vector<int>{0, 1, 2}));
+  EXPECT_TRUE(start.val.empty());
+  const SynthConfig c = parse_synth_config(base("splits: {val: 0.1, test: 0.1, place: 0.5}\n"), "c.yaml");
+  EXPECT_DOUBLE_EQ(c.split_place, 0.5);
+  EXPECT_DOUBLE_EQ(parse_synth_config(base(), "d.yaml").split_place, 1.0);
+  expect_error([] { parse_synth_config(base("splits: {place: 2}\n"), "bad.yaml"); }, {"bad.yaml", "splits.place"});
+}
