@@ -12,6 +12,7 @@
 
 #include <tbb/global_control.h>
 
+#include "capture/io/portable_random.h"
 #include "capture/render/renderer.h"
 #include "capture/io/strict_yaml.h"
 #include "capture/io/text_reader.h"
@@ -342,6 +343,8 @@ SyntheticDataset::SyntheticDataset(const std::string& dir, DatasetOptions option
     fail(where, ": no split '", options_.split, "' (splits: ", names, ")");
   }
   frames_ = split->second;
+  if (options_.augmentation.background_probability > 0 && !options_.augmentation.backgrounds.empty())
+    photos_ = load_background_photos(options_.augmentation.backgrounds);
 
   const std::string cameras_path = (fs::path(dir) / "cameras.yaml").string();
   std::vector<Camera> cameras;
@@ -384,6 +387,17 @@ Sample SyntheticDataset::load(int index) const {
   return load_at(index, frames_[size_t(index / views)], info_.views[size_t(index % views)]);
 }
 
+Sample SyntheticDataset::load(int index, uint64_t augmentation_seed) const {
+  if (!options_.augmentation.enabled()) return load(index);
+  if (index < 0 || index >= size())
+    fail("SyntheticDataset::load: index ", index, " out of range (split '", options_.split,
+         "' has ", size(), " samples)");
+  const int views = static_cast<int>(info_.views.size());
+  const AugmentationDraw draw =
+      draw_augmentation(options_.augmentation, static_cast<int>(photos_.size()), augmentation_seed);
+  return load_at(index, frames_[size_t(index / views)], info_.views[size_t(index % views)], &draw);
+}
+
 Sample SyntheticDataset::load(int frame, const std::string& view) const {
   const auto f = std::find(frames_.begin(), frames_.end(), frame);
   if (f == frames_.end())
@@ -396,20 +410,22 @@ Sample SyntheticDataset::load(int frame, const std::string& view) const {
   return load_at(index, frame, view);
 }
 
-Sample SyntheticDataset::load_at(int index, int frame, const std::string& view) const {
+Sample SyntheticDataset::load_at(int index, int frame, const std::string& view, const AugmentationDraw* draw) const {
   const cv::Mat bgr = read_png(dataset_image_path(info_, frame, view), cv::IMREAD_COLOR, CV_8UC3,
                                "an 8-bit BGR image", info_);
   const cv::Mat mask = read_dataset_mask(info_, frame, view);
   const Body25 keypoints = read_dataset_keypoints(dataset_keypoints_path(info_, frame, view));
-  Sample s = prepare_sample(bgr, mask, keypoints, camera(frame, view), options_);
+  const cv::Mat* photo = draw && draw->background >= 0 ? &photos_[size_t(draw->background)] : nullptr;
+  Sample s = prepare_sample(bgr, mask, keypoints, camera(frame, view), options_, draw, photo);
   s.index = index;
   s.frame = frame;
   s.view = view;
   return s;
 }
 
-Sample prepare_sample(const cv::Mat& bgr, const cv::Mat& mask, const Body25& keypoints, const Camera& camera,
-                      const DatasetOptions& options) {
+Sample prepare_sample(const cv::Mat& bgr_in, const cv::Mat& mask, const Body25& keypoints, const Camera& camera,
+                      const DatasetOptions& options, const AugmentationDraw* draw, const cv::Mat* photo) {
+  const cv::Mat bgr = photo && draw ? replace_background(bgr_in, mask, *photo, *draw) : bgr_in;
   WEFT_CHECK(bgr.type() == CV_8UC3 && mask.type() == CV_8UC1 && bgr.size() == mask.size(),
              "prepare_sample: expected an 8-bit BGR image and an 8-bit mask of one size");
   WEFT_CHECK(bgr.cols == camera.width && bgr.rows == camera.height, "prepare_sample: a ", bgr.cols, "x", bgr.rows,
@@ -418,6 +434,17 @@ Sample prepare_sample(const cv::Mat& bgr, const cv::Mat& mask, const Body25& key
   Sample s;
   s.camera = camera;
   s.crop = choose_crop(mask, keypoints, S, options.margin);
+  if (draw && (draw->shift_x != 0 || draw->shift_y != 0 || draw->scale != 1)) {
+    // Moved and scaled about its centre; the camera follows below.
+    CropWindow& c = s.crop;
+    const double cx = c.left + 0.5 * c.side + draw->shift_x * c.side, cy = c.top + 0.5 * c.side + draw->shift_y * c.side;
+    c.side = std::max(1, static_cast<int>(std::lround(c.side * draw->scale)));
+    c.left = static_cast<int>(std::lround(cx - 0.5 * c.side));
+    c.top = static_cast<int>(std::lround(cy - 0.5 * c.side));
+    c.scale = double(S) / c.side;
+    c.x0 = c.left - 0.5 + 0.5 / c.scale;
+    c.y0 = c.top - 0.5 + 0.5 / c.scale;
+  }
   s.crop_camera = crop_camera(s.camera, s.crop, S);
 
   // Image: to float before resizing, so only one rounding happens (the PNG's).
@@ -425,6 +452,7 @@ Sample prepare_sample(const cv::Mat& bgr, const cv::Mat& mask, const Body25& key
   cut_square(bgr, s.crop).convertTo(image, CV_32FC3, 1.0 / 255.0);
   image = resize_square(image, S);
   cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
+  if (draw) jitter_colours(image, *draw);
   if (options.normalize) {
     for (int y = 0; y < S; ++y) {
       float* p = image.ptr<float>(y);
@@ -599,7 +627,12 @@ void DatasetPrefetcher::load_slot(int64_t batch, const std::vector<int>& indices
     samples.reserve(indices.size());
     for (int i : indices) {
       if (stopping_) break;
-      samples.push_back(dataset_.load(i));
+      // Each sample of each epoch its own augmentation draws (a function of the stream's
+      // seed, the epoch and the sample: resume-exact).
+      samples.push_back(dataset_.options().augmentation.enabled()
+                            ? dataset_.load(i, mix_seed(options_.seed ^ 0x4155474du, static_cast<uint64_t>(epoch),
+                                                        static_cast<uint64_t>(i)))
+                            : dataset_.load(i));
     }
     if (!stopping_) {
       loaded = make_batch(samples);

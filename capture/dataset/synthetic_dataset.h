@@ -45,6 +45,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "capture/dataset/augmentation.h"
 #include "capture/io/camera.h"
 #include "capture/io/openpose.h"
 #include "graph/tensor.h"
@@ -102,6 +103,9 @@ struct DatasetOptions {
   int input_size = 256;   // S: crops are S×S pixels
   double margin = 0.15;   // crop side = max(box w, h) · (1 + 2 margin)
   bool normalize = true;  // ImageNet mean/std on RGB in [0, 1] (torchvision)
+  // Applied by load(index, augmentation_seed) only (DatasetPrefetcher passes a seed per
+  // sample and epoch when it is enabled); load(index) is never augmented.
+  AugmentationOptions augmentation;
 };
 
 // Where a crop's square came from.
@@ -143,8 +147,11 @@ struct Sample {
 // (CV_8UC1 0/255, same size) and its detections (full-image px; zeros when there are
 // none), cut and resized exactly as SyntheticDataset::load does: what `weft infer` feeds
 // the networks from a video frame. index, frame and view are left for the caller.
+// With `draw` (augmentation.h) the crop is moved and scaled, the colours jittered and, with
+// `photo`, the background replaced before cutting (options.augmentation is not read here).
 Sample prepare_sample(const cv::Mat& bgr, const cv::Mat& mask, const Body25& keypoints, const Camera& camera,
-                      const DatasetOptions& options);
+                      const DatasetOptions& options, const AugmentationDraw* draw = nullptr,
+                      const cv::Mat* photo = nullptr);
 
 class SyntheticDataset {
  public:
@@ -161,16 +168,20 @@ class SyntheticDataset {
   // Thread-safe. A missing or unreadable image, mask or keypoint file, or one of the wrong
   // size or type, is a weft::Error naming its path.
   Sample load(int index) const;
+  // The same augmented by options().augmentation with draws from `augmentation_seed`
+  // (the sample as load(index) gives it when augmentation is off).
+  Sample load(int index, uint64_t augmentation_seed) const;
   // A frame of the split and one of the views (anything else is an error).
   Sample load(int frame, const std::string& view) const;
 
   const Camera& camera(int frame, const std::string& view) const;
 
  private:
-  Sample load_at(int index, int frame, const std::string& view) const;
+  Sample load_at(int index, int frame, const std::string& view, const AugmentationDraw* draw = nullptr) const;
 
   DatasetInfo info_;
   DatasetOptions options_;
+  std::vector<cv::Mat> photos_;  // options_.augmentation.backgrounds, loaded once
   std::vector<int> frames_;
   std::map<std::string, Camera> cameras_;
 };

@@ -104,7 +104,9 @@ class Trainer {
     d.input_size = cfg_.network.input_size;
     d.margin = cfg_.network.margin;
     d.split = "train";
+    d.augmentation = cfg_.augmentation;
     train_ = std::make_unique<SyntheticDataset>(options.data, d);
+    d.augmentation = AugmentationOptions();
     WEFT_CHECK(!train_->frames().empty(), options.data, "/dataset.yaml: the train split is empty");
     std::vector<int> frames = train_->frames();
     if (info_.splits.count("val") && !info_.splits.at("val").empty()) {

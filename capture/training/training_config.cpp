@@ -74,7 +74,7 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
                           "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
-                          "shards", "oracle_pose", "physics"});
+                          "shards", "oracle_pose", "physics", "augmentation"});
   TrainingConfig c;
   c.file = name;
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
@@ -87,7 +87,8 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
              {"checkpoint_every", &c.checkpoint_every, 1, 1e8},
              {"keep_checkpoints", &c.keep_checkpoints, 1, 1000},
              {"shards", &c.shards, 0, 4096}},
-            {"seed", "network", "stages", "oracle_pose", "physics"});
+            {"seed", "network", "stages", "oracle_pose", "physics", "augmentation"});
+  if (root["augmentation"]) c.augmentation = parse_augmentation(y, root["augmentation"], "augmentation");
   if (root["oracle_pose"]) c.oracle_pose = y.get<bool>(root["oracle_pose"], "oracle_pose", "true or false");
   if (const YAML::Node n = root["network"]) {
     NetworkConfig& m = c.network;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "capture/dataset/augmentation.h"
 #include "capture/studio/synthetic_studio.h"
 
 namespace weft::capture {
@@ -40,7 +41,7 @@ struct NetworkConfig {
   std::string backbone = "resnet18";  // resnet18 | resnet34 | resnet50
   int input_size = 128;               // crops are input_size² pixels
   double margin = 0.15;               // crop margin around the person (dataset reader)
-  double dof_scale = 0.1;             // PoseNet: dof = rest + dof_scale · output (radians, units)
+  double dof_scale = 0.1;             // PoseNet: dof = rest + dof_scale · output (radians, units); limited dofs: pose_dofs.h
   double angle_scale = 0.05;          // PADefNet: node Euler angle = angle_scale · output (radians)
   double translation_scale_m = 0.01;  // PADefNet: node translation = this · output (metres)
 };
@@ -87,6 +88,9 @@ struct TrainingConfig {
   // isolates what the deformation stages do to the garment from pose error (the paper
   // assumes PoseNet fixed in its section 3.3.2). The pose stage is then not needed.
   bool oracle_pose = false;
+  // The train split's samples, augmented (capture/dataset/augmentation.h); validation and
+  // evaluation read the images as they are.
+  AugmentationOptions augmentation;
   PhysicsConfig physics;
 
   int total_steps() const;

@@ -14,6 +14,7 @@
 
 #include "capture/render/renderer.h"
 #include "capture/dataset/synthetic_dataset.h"
+#include "capture/io/strict_yaml.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
@@ -676,4 +677,150 @@ TEST(DatasetPrefetcher, StopsCleanlyWithBatchesInFlight) {
   }
   o.batch_size = 0;
   expect_error([&] { DatasetPrefetcher p(train, o); }, {"batch_size"});
+}
+
+// ---------------------------------------------------------------------- augmentation
+
+TEST(DatasetAugmentation, JitteredCropsKeepCameraKeypointsAndImageTogether) {
+  ScratchDir scratch("dataset");
+  const FakeDataset d = write_dataset(scratch);
+  DatasetOptions o{"train", 60};
+  o.normalize = false;
+  o.augmentation.shift = 0.15;
+  o.augmentation.scale = 0.3;
+  const SyntheticDataset train(d.dir, o);
+  int moved = 0;
+  for (int i = 0; i < train.size(); ++i)
+    for (uint64_t seed : {1u, 2u, 3u}) {
+      const Sample plain = train.load(i), s = train.load(i, seed);
+      if (s.crop.source != CropSource::mask) continue;
+      SCOPED_TRACE("sample " + std::to_string(i) + " seed " + std::to_string(seed));
+      EXPECT_EQ(cv::norm(s.image, train.load(i, seed).image, cv::NORM_INF), 0);  // a seed is one draw
+      if (s.crop.left != plain.crop.left || s.crop.side != plain.crop.side) ++moved;
+      // The crop camera and the keypoints follow the crop.
+      for (int k = 0; k < kBody25Count; ++k) {
+        if (undetected(k)) continue;
+        EXPECT_LT((s.keypoints.row(k).head<2>().transpose() - s.crop_camera.project(joint(k))).norm(), 1e-6);
+      }
+      // The image shows the marker where the crop map sends it (as for plain crops).
+      double sw = 0, sx = 0, sy = 0;
+      for (int y = 0; y < 60; ++y)
+        for (int x = 0; x < 60; ++x) {
+          const double w = std::max(0.0, s.image.at<cv::Vec3f>(y, x)[1] * 255.0 - kPerson[1]);
+          sw += w, sx += w * x, sy += w * y;
+        }
+      const cv::Point2i m = marker_pixel(ellipse_centre(d.cameras[size_t(i % 3)], s.frame, i % 3));
+      const Eigen::Vector2d expected = s.crop.to_crop({m.x, m.y});
+      if (expected.minCoeff() < 2 || expected.maxCoeff() > 57) continue;  // jittered off the edge
+      ASSERT_GT(sw, 0);
+      EXPECT_NEAR(sx / sw, expected.x(), 0.25);
+      EXPECT_NEAR(sy / sw, expected.y(), 0.25);
+      // The mask moved with the image: the person's colour sits on the mask.
+      EXPECT_EQ(s.mask.at<uint8_t>(int(std::lround(expected.y())), int(std::lround(expected.x()))), 1);
+    }
+  EXPECT_GT(moved, 10);
+}
+
+TEST(DatasetAugmentation, PhotosReplaceTheBackgroundOnlyAndColoursJitter) {
+  ScratchDir scratch("dataset");
+  const FakeDataset d = write_dataset(scratch);
+  cv::Mat photo(50, 90, CV_8UC3, cv::Scalar(10, 200, 250));
+  cv::imwrite(scratch.file("photo.png"), photo);
+  DatasetOptions o{"train", 40};
+  o.normalize = false;
+  o.augmentation.backgrounds = scratch.file("photo.png");
+  o.augmentation.background_probability = 1;
+  const SyntheticDataset train(d.dir, o);
+  const Sample plain = train.load(0), s = train.load(0, 5);
+  ASSERT_EQ(s.crop.left, plain.crop.left);  // no crop jitter asked for
+  int person = 0, back = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) {
+      const cv::Vec3f p = s.image.at<cv::Vec3f>(y, x), q = plain.image.at<cv::Vec3f>(y, x);
+      if (plain.mask.at<uint8_t>(y, x) && cv::norm(q - cv::Vec3f(kPerson[2], kPerson[1], kPerson[0]) / 255.f) < 1e-3) {
+        EXPECT_LT(cv::norm(p - q), 1e-5) << "the person is kept";
+        ++person;
+      } else if (!plain.mask.at<uint8_t>(y, x) && cv::norm(q - cv::Vec3f(kBackground[2], kBackground[1], kBackground[0]) / 255.f) < 1e-3) {
+        // RGB of the photo's BGR (10, 200, 250).
+        EXPECT_LT(cv::norm(p - cv::Vec3f(250, 200, 10) / 255.f), 1e-3) << "the studio's background is replaced";
+        ++back;
+      }
+    }
+  EXPECT_GT(person, 20);
+  EXPECT_GT(back, 20);
+
+  // Colour jitter: brightness scales, then clamps to [0, 1].
+  AugmentationDraw draw;
+  draw.brightness = 1.5;
+  cv::Mat rgb(2, 2, CV_32FC3, cv::Scalar(0.2, 0.5, 0.8));
+  jitter_colours(rgb, draw);
+  const cv::Vec3f v = rgb.at<cv::Vec3f>(0, 0);
+  EXPECT_NEAR(v[0], 0.3, 1e-6);
+  EXPECT_NEAR(v[1], 0.75, 1e-6);
+  EXPECT_NEAR(v[2], 1.0, 1e-6);
+  draw = AugmentationDraw();
+  draw.saturation = 0;  // grey
+  jitter_colours(rgb, draw);
+  EXPECT_NEAR(rgb.at<cv::Vec3f>(1, 1)[0], rgb.at<cv::Vec3f>(1, 1)[2], 1e-6);
+}
+
+namespace {
+// Largest difference between sample i of batch a and sample j of batch b (their images).
+double image_difference(const Batch& a, int i, const Batch& b, int j) {
+  const int64_t n = a.images.numel() / a.size();
+  const float* p = a.images.data<float>() + i * n;
+  const float* q = b.images.data<float>() + j * n;
+  double worst = 0;
+  for (int64_t k = 0; k < n; ++k) worst = std::max(worst, double(std::abs(p[k] - q[k])));
+  return worst;
+}
+}  // namespace
+
+TEST(DatasetAugmentation, ThePrefetcherAugmentsPerEpochAndResumesExactly) {
+  ScratchDir scratch("dataset");
+  const FakeDataset d = write_dataset(scratch);
+  DatasetOptions o{"train", 32};
+  o.augmentation.shift = 0.1;
+  o.augmentation.brightness = 0.3;
+  const SyntheticDataset train(d.dir, o);
+  PrefetchOptions p;
+  p.batch_size = 4;
+  p.seed = 9;
+  p.loader_threads = 0;
+  std::vector<Batch> stream;
+  {
+    DatasetPrefetcher all(train, p);
+    for (int k = 0; k < 9; ++k) stream.push_back(all.next());
+  }
+  // Batch 5 onward again from a fresh prefetcher (a resumed run): the same tensors.
+  p.first_batch = 5;
+  DatasetPrefetcher resumed(train, p);
+  for (int k = 5; k < 9; ++k) {
+    const Batch b = resumed.next();
+    ASSERT_EQ(b.indices, stream[size_t(k)].indices);
+    for (int i = 0; i < b.size(); ++i) EXPECT_EQ(image_difference(b, i, stream[size_t(k)], i), 0.0) << "batch " << k;
+  }
+  // One sample in two epochs: two different draws.
+  const int per_epoch = resumed.batches_per_epoch();
+  ASSERT_LT(2 * per_epoch, 9);
+  bool differs = false;
+  for (int i = 0; i < 4 && !differs; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (stream[0].indices[size_t(i)] == stream[size_t(per_epoch)].indices[size_t(j)])
+        differs = image_difference(stream[0], i, stream[size_t(per_epoch)], j) > 0;
+  EXPECT_TRUE(differs);
+}
+
+TEST(DatasetAugmentation, ConfigErrorsNameTheKey) {
+  const StrictYaml y{"aug.yaml", "."};
+  auto parse = [&](const std::string& text) { return parse_augmentation(y, y.parse(text), "augmentation"); };
+  const AugmentationOptions a = parse("{shift: 0.1, scale: 0.2, brightness: 0.3, contrast: 0.1, saturation: 0.2}");
+  EXPECT_DOUBLE_EQ(a.scale, 0.2);
+  EXPECT_TRUE(a.enabled());
+  EXPECT_FALSE(AugmentationOptions().enabled());
+  expect_error([&] { parse("{shfit: 0.1}"); }, {"aug.yaml", "augmentation.shfit", "unknown key"});
+  expect_error([&] { parse("{shift: 0.9}"); }, {"aug.yaml", "augmentation.shift"});
+  expect_error([&] { parse("{background_probability: 0.5}"); }, {"augmentation.background_probability", "backgrounds"});
+  expect_error([&] { parse("{backgrounds: /nonexistent/photos, background_probability: 0.5}"); },
+               {"aug.yaml", "augmentation.backgrounds", "/nonexistent/photos"});
 }
