@@ -1,5 +1,7 @@
 #include "capture/character/body_skeleton_fit.h"
 
+#include "capture/character/joint_limits.h"
+
 #include <assimp/postprocess.h>
 #include <Eigen/Eigenvalues>
 #include <assimp/scene.h>
@@ -333,8 +335,34 @@ Skeleton build_body_skeleton(const std::map<std::string, Vector3d>& pos,
     m.size = 0.01;
     s.markers.push_back(m);
   }
+  apply_dof_limits(s, default_body_dof_limits(), "body skeleton");
   validate_skeleton(s, "body skeleton");
   return s;
+}
+
+std::vector<std::string> body_skeleton_dof_names() {
+  std::vector<std::string> out;
+  for (const JointSpec& spec : kSpecs) {
+    const std::string name = spec.name;
+    switch (spec.kind) {
+      case Kind::root:
+        for (const char* a : {"_tx", "_ty", "_tz", "_rx", "_ry", "_rz"}) out.push_back(name + a);
+        break;
+      case Kind::ball:
+        for (const char* a : {"_rx", "_ry", "_rz"}) out.push_back(name + a);
+        break;
+      case Kind::knee:
+      case Kind::toe:
+        out.push_back(name + "_rx");
+        break;
+      case Kind::elbow:
+        out.push_back(name + "_flex");
+        break;
+      case Kind::end:
+        break;
+    }
+  }
+  return out;
 }
 
 // ------------------------------------------------------------------ the fit

@@ -93,8 +93,12 @@ std::vector<char> arm_vertices(const TriangleMesh& body, const BodySkeletonFit& 
 // joints; ball joints = revolute rx, ry, rz with zero offsets between them; knees, elbows
 // and toes = one limited revolute hinge; end sites = revolute joints no dof drives. Each
 // dof drives one joint with weight 1 and is named like its joint with the axis suffix
-// (hips_tx … hips_rz, spine_rx, …, l_knee_rx, l_elbow_flex, l_toe_rx).
+// (hips_tx … hips_rz, spine_rx, …, l_knee_rx, l_elbow_flex, l_toe_rx). Ball joints get
+// the anatomical limits of default_body_dof_limits (joint_limits.h); shoulders and the
+// root are free.
 Skeleton build_body_skeleton(const std::map<std::string, Eigen::Vector3d>& joints,
                              const std::map<std::string, Eigen::Vector3d>& markers);
+// The dof names build_body_skeleton gives, in its order.
+std::vector<std::string> body_skeleton_dof_names();
 
 }  // namespace weft::capture

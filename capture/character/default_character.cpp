@@ -10,6 +10,7 @@
 
 #include "capture/io/atomic_file.h"
 #include "capture/character/automatic_weights.h"
+#include "capture/character/joint_limits.h"
 #include "capture/io/mesh_io.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/io/strict_yaml.h"
@@ -36,11 +37,11 @@ int count(const StrictYaml& y, const YAML::Node& n, const std::string& key, int 
 DefaultCharacterConfig parse_config(const StrictYaml& y, const YAML::Node& root) {
   DefaultCharacterConfig c;
   c.file = y.file;
-  y.check_keys(root, "", {"name", "base", "mesh", "height_m", "body", "garment", "appearance"});
+  y.check_keys(root, "", {"name", "base", "mesh", "height_m", "body", "garment", "appearance", "joint_limits"});
   if (root["name"]) c.name = y.get<std::string>(root["name"], "name", "a string");
   if (root["base"]) {
     // An existing character.yaml dressed with a generated garment: its body is used as is.
-    for (const char* k : {"mesh", "height_m", "body"})
+    for (const char* k : {"mesh", "height_m", "body", "joint_limits"})
       if (root[k]) y.fail_at(root[k], k, "not with 'base' (the base character.yaml describes the body)");
     c.base = fs::absolute(y.path(root["base"], "base")).lexically_normal().string();
     const std::string ext = fs::path(c.base).extension().string();
@@ -83,6 +84,7 @@ DefaultCharacterConfig parse_config(const StrictYaml& y, const YAML::Node& root)
     if (g["rigidity"]) c.cloth_rigidity = y.number(g["rigidity"], "garment.rigidity", 0, 1);
   }
   if (root["appearance"]) c.appearance = parse_appearance(y, root["appearance"], "appearance");
+  if (root["joint_limits"]) c.joint_limits = parse_body_joint_limits(y, root["joint_limits"], "joint_limits");
   return c;
 }
 
@@ -137,6 +139,7 @@ DefaultCharacter make_fitted_character(const DefaultCharacterConfig& cfg) {
   ch.name = cfg.name;
   ch.source = cfg.file;
   ch.metres_per_unit = 1.0;
+  apply_dof_limits(out.fit.skeleton, cfg.joint_limits, what);  // over the defaults of build_body_skeleton
   ch.skeleton = out.fit.skeleton;
   ch.rest_dofs = Eigen::VectorXd::Zero(ch.skeleton.num_dofs());  // the zero pose is the bind pose
   ch.bind = forward_kinematics(ch.skeleton, ch.rest_dofs);

@@ -14,6 +14,7 @@
 #include "capture/character/body_skeleton_fit.h"
 #include "capture/character/character.h"
 #include "capture/character/dressed_character.h"
+#include "capture/character/joint_limits.h"
 
 namespace weft::capture {
 
@@ -39,6 +40,8 @@ struct DefaultCharacterConfig {
   // Per-vertex colours painted on the body and garment (capture/character/appearance.h);
   // with base: the garment only (the base keeps its own texture).
   AppearanceConfig appearance;
+  // Overrides of the generated skeleton's joint limits (joint_limits.h; not with base).
+  std::vector<DofLimit> joint_limits;
 };
 
 // Strict YAML (unknown keys and bad values are errors naming the key, the file and the

@@ -73,15 +73,10 @@ SampleViews sample_views(const std::vector<Camera>& input_cameras,
 
 CaptureModel::CaptureModel(const Character& character, const NetworkConfig& config)
     : character_(character), config_(config), layer_(character, DType::F32),
-      param_(pose_parametrisation(character)) {
+      param_(pose_parametrisation(character)),
+      pose_dofs_(character.skeleton, character.rest_dofs, param_.free_dofs, config.dof_scale) {
   const Tensor& m = layer_.body25_mask();
   for (int64_t i = 0; i < m.numel(); ++i) keypoint_mask_.push_back(m.data<float>()[i]);
-  const int64_t F = param_.free_dofs.size(), D = character.rest_dofs.size();
-  std::vector<double> sel(F * D, 0.0), rest(D);
-  for (int64_t i = 0; i < F; ++i) sel[i * D + param_.free_dofs[i]] = 1.0;
-  for (int64_t d = 0; d < D; ++d) rest[d] = character.rest_dofs[d];
-  free_to_dofs_ = Tensor::from_data({F, D}, sel, DType::F32);
-  rest_dofs_ = Tensor::from_data({D}, rest, DType::F32);
   pivot_ = Tensor::from_data({1, 3}, {param_.pivot.x(), param_.pivot.y(), param_.pivot.z()}, DType::F32);
   canonical_ = Tensor::from_data({3, 3}, {1, 0, 0, 0, -1, 0, 0, 0, -1}, DType::F32);
   rotation_bias_ = Tensor::from_data({6}, {1, 0, 0, 0, 1, 0}, DType::F32);
@@ -135,8 +130,7 @@ CapturePrediction CaptureModel::predict(const Tensor& pose_output, const Tensor&
   WEFT_CHECK(int64_t(views.input_rotations.size()) == B, "CaptureModel: ", views.input_rotations.size(),
              " input views for a batch of ", B);
   CapturePrediction p;
-  const Tensor theta = ops::scale(ops::slice(pose_output, 1, 0, F), config_.dof_scale);
-  p.dofs = ops::add(ops::matmul(theta, free_to_dofs_), rest_dofs_);
+  p.dofs = pose_dofs_.dofs(ops::slice(pose_output, 1, 0, F));  // limited dofs within their limits
   const Tensor relative = rotation_from_6d(ops::add(ops::slice(pose_output, 1, F, F + 6), rotation_bias_));
   std::vector<double> rc(B * 9);
   for (int64_t b = 0; b < B; ++b)

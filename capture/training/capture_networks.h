@@ -1,6 +1,7 @@
 #pragma once
 // The method's two networks and what their outputs mean (../shared/DESIGN.md):
-// - PoseNet (a ResNet) regresses the skeleton's dofs θ, except those of the root chain,
+// - PoseNet (a ResNet) regresses the skeleton's dofs θ, except those of the root chain
+//   (limited dofs through a sigmoid that keeps them within their limits: pose_dofs.h),
 //   and the camera-relative root rotation α (6D representation of Zhou et al. 2019,
 //   continuous over all rotations: a person seen from any side of a ring of cameras).
 // - PADefNet (a ResNet with a zero-initialised last layer, so training starts from the
@@ -26,6 +27,7 @@
 #include "capture/io/camera.h"
 #include "capture/training/global_pose.h"
 #include "capture/training/multiview_supervision.h"
+#include "capture/training/pose_dofs.h"
 #include "capture/training/training_config.h"
 #include "nn/resnet.h"
 
@@ -82,6 +84,7 @@ class CaptureModel {
   const Character& character() const { return character_; }
   const DeformationLayer& layer() const { return layer_; }
   const PoseParametrisation& parametrisation() const { return param_; }
+  const PoseDofs& pose_dofs() const { return pose_dofs_; }
   const std::vector<double>& keypoint_mask() const { return keypoint_mask_; }  // 25: 1 mapped
   int64_t pose_outputs() const;         // free dofs + 6
   int64_t deformation_outputs() const;  // 6 (K_body + K_cloth)
@@ -114,8 +117,7 @@ class CaptureModel {
   DeformationLayer layer_;
   PoseParametrisation param_;
   std::vector<double> keypoint_mask_;
-  Tensor free_to_dofs_;   // [F,D] 0/1
-  Tensor rest_dofs_;      // [D]
+  PoseDofs pose_dofs_;    // PoseNet's outputs → dofs, within the skeleton's limits
   Tensor pivot_;          // [1,3]
   Tensor canonical_;      // [3,3] C
   Tensor rotation_bias_;  // [6] the identity's 6D vector

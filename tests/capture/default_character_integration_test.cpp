@@ -2,6 +2,7 @@
 // numbers, the fitted skeleton, skinning weights, garments and the written folder.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -9,6 +10,8 @@
 
 #include "capture/io/closest_point.h"
 #include "capture/character/default_character.h"
+#include "capture/motion/motion_retarget.h"
+#include "capture/motion/procedural_motion.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft::capture;
@@ -343,4 +346,35 @@ TEST(DefaultCharacterFolder, OutputIsDeterministic) {
     ++files;
   }
   EXPECT_EQ(files, 7);  // character.yaml body.obj body.skeleton rest.motion dress.obj anchors.txt inactive_faces.txt
+}
+
+// The random motion (configs/motions/random_poses.yaml), retargeted onto the generated
+// character, stays within its joint limits (joint_limits.h) and still follows the source:
+// the limits cut only what a human could not do.
+TEST(DefaultCharacterFit, RandomPosesRetargetWithinTheJointLimits) {
+  REQUIRE_HUMAN();
+  const Character& ch = skirt().character;
+  const Skeleton& s = ch.skeleton;
+  for (const char* n : {"l_hip_ry", "r_hip_rz", "spine_ry", "chest_rx", "neck_ry", "head_rz"})
+    EXPECT_TRUE(s.dofs[s.dof_index(n)].limited) << n;
+  RetargetOptions o;
+  o.fps = 10;
+  o.end_s = 12;
+  const RetargetResult r =
+      retarget_motion(generate_motion(load_motion_spec(repo_file("configs/motions/random_poses.yaml"))),
+                      load_retarget_mapping(repo_file("configs/retarget/humanoid_to_makehuman.yaml")), ch, o);
+  ASSERT_TRUE(r.motion.dofs.allFinite());
+  double at_limit = 0;
+  for (int f = 0; f < r.motion.num_frames(); ++f)
+    for (int d = 0; d < s.num_dofs(); ++d) {
+      const Dof& dof = s.dofs[d];
+      if (!dof.limited) continue;
+      const double v = r.motion.dofs(f, d);
+      EXPECT_GE(v, dof.lower - 1e-9) << dof.name << " frame " << f;
+      EXPECT_LE(v, dof.upper + 1e-9) << dof.name << " frame " << f;
+      at_limit += std::min(v - dof.lower, dof.upper - v) < 1e-6;
+    }
+  std::printf("random_poses → makehuman, %d frames: bone direction error mean %.2f°, max %.2f°, %.0f dof values at a limit\n",
+              r.motion.num_frames(), r.mean_direction_error_deg, r.max_direction_error_deg, at_limit);
+  EXPECT_LT(r.mean_direction_error_deg, 8.0);
 }

@@ -394,8 +394,8 @@ TEST(CaptureModel, ExpressesTheGroundTruthPose) {
     for (int v : {0, 5}) {
       const Camera& cam = sup.camera(frame, v);
       const Eigen::Matrix3d relative = cam.R * R_gt * C;  // R_world = R_cᵀ R(α) C
-      std::vector<double> out;
-      for (int d : param.free_dofs) out.push_back(motion.dofs(frame, d) / cfg.network.dof_scale);
+      const Eigen::VectorXd free = model.pose_dofs().outputs_for(motion.dofs.row(frame).transpose());
+      std::vector<double> out(free.data(), free.data() + free.size());
       for (int c = 0; c < 2; ++c)
         for (int r = 0; r < 3; ++r) out.push_back(relative(r, c) - (r == c ? 1.0 : 0.0));
       std::vector<std::vector<KeypointView>> views(1);
