@@ -52,6 +52,14 @@ TEST(SynthConfig, ShippedConfigsLoad) {
   const SynthConfig wild = load_synth_config(repo_file("configs/synth/in_the_wild.yaml"));
   EXPECT_EQ(wild.cameras.kind, CameraRigKind::wild);
   EXPECT_EQ(wild.render.background, BackgroundKind::clutter);
+  // Poses that cover the space: ≥ 5,000 frames, 8 views, the unseen motion left out, the
+  // held-out stretch from the middle of each clip, lights drawn per clip.
+  const SynthConfig random = load_synth_config(repo_file("configs/synth/training_set_random_poses.yaml"));
+  EXPECT_GE(random.frames(), 5000);
+  EXPECT_EQ(random.cameras.studio.views, 8);
+  for (const SynthMotionConfig& m : random.motions) EXPECT_EQ(m.bvh.find("01_03"), std::string::npos);
+  EXPECT_DOUBLE_EQ(random.split_place, 0.5);
+  EXPECT_EQ(random.render.lighting.lights, 2);
   // Over photographs: Debian's mate-backgrounds (scripts/setup.sh).
   REQUIRE_DEBIAN_FILE("/usr/share/backgrounds/mate/nature", "mate-backgrounds");
   const SynthConfig photos = load_synth_config(repo_file("configs/synth/in_the_wild_photos.yaml"));
