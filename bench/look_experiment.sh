@@ -48,11 +48,15 @@ for seed in $seeds; do
     cfg="$out/train_s$seed.yaml"
     abs < "$root/configs/train/pose_look.yaml" | sed -e "s/^seed: .*/seed: $seed/" > "$cfg"
     if [ $quick = 1 ]; then sed -i -e 's/pose:    {steps: 1200/pose:    {steps: 300/' "$cfg"; fi
-    if [ ! -f "$run/evaluation_test.json" ]; then
+    if [ ! -f "$run/model.safetensors" ]; then
       log "2. weft train ($arm, seed $seed) → $run"
       resume=()
       [ -d "$run/checkpoints" ] && resume=(--resume)
-      "$weft" train --config "$cfg" --data "$out/$arm" --out "$run" "${resume[@]}" --evaluate test >&2
+      "$weft" train --config "$cfg" --data "$out/$arm" --out "$run" "${resume[@]}" >&2
+    fi
+    if [ ! -f "$run/evaluation_test.json" ]; then
+      log "2. weft train --evaluate test ($arm, seed $seed)"
+      "$weft" train --config "$cfg" --data "$out/$arm" --out "$run" --evaluate test >&2
     fi
   done
 done
