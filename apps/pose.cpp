@@ -13,7 +13,7 @@
 #include "capture/character/character.h"
 #include "capture/motion/pose_sequence.h"
 #include "capture/character/skeletool_io.h"
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::apps {

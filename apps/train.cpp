@@ -10,7 +10,7 @@
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "capture/evaluation/split_evaluation.h"
 #include "capture/training/trainer.h"
 #include "graph/error.h"

@@ -1,8 +1,6 @@
 #include "physics/scene.h"
 
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -12,8 +10,12 @@
 #include <set>
 #include <sstream>
 
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
+#include "geometry/mesh_io.h"
 #include "graph/atomic_file.h"
 #include "graph/error.h"
+#include "physics/cloth_material_yaml.h"
 
 namespace weft::physics {
 
@@ -21,74 +23,75 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Reads one YAML mapping, refusing keys it does not know.
+// One YAML mapping of the scene, read through the strict reader (files/strict_yaml.h): unknown
+// keys and wrong types name the file, the line and the key; the value checks below name the
+// file and the key.
 class Section {
  public:
-  Section(const YAML::Node& node, std::string file, std::string prefix)
-      : node_(node), file_(std::move(file)), prefix_(std::move(prefix)) {
-    WEFT_CHECK(node_.IsMap(), file_, ": '", prefix_.empty() ? "(top level)" : prefix_,
-               "' must be a mapping");
+  Section(const StrictYaml& yaml, const YAML::Node& node, std::string prefix)
+      : y_(yaml), node_(node), prefix_(std::move(prefix)) {
+    if (!node_.IsMap()) y_.fail_at(node_, prefix_.empty() ? "(top level)" : prefix_, "must be a mapping");
   }
-  void allow(std::initializer_list<const char*> keys) {
-    std::set<std::string> ok(keys.begin(), keys.end());
-    for (const auto& kv : node_) {
-      const std::string k = kv.first.as<std::string>();
-      if (!ok.count(k)) {
-        std::string list;
-        for (const auto& o : ok) list += (list.empty() ? "" : ", ") + o;
-        fail(file_, ": unknown key '", key(k), "' (expected one of: ", list, ")");
-      }
-    }
-  }
+  void allow(std::initializer_list<const char*> keys) { y_.check_keys(node_, prefix_, keys); }
   bool has(const char* k) const { return static_cast<bool>(node_[k]); }
   std::string key(const std::string& k) const { return prefix_.empty() ? k : prefix_ + "." + k; }
-  const std::string& file() const { return file_; }
   YAML::Node node(const char* k) const { return node_[k]; }
 
   template <class T>
   T get(const char* k, const char* expected) const {
     const YAML::Node n = node_[k];
-    WEFT_CHECK(n, file_, ": missing key '", key(k), "'");
+    if (!n) y_.fail_at(node_, key(k), "missing key");
     return convert<T>(n, key(k), expected);
   }
   template <class T>
   T get_or(const char* k, T fallback, const char* expected) const {
     return has(k) ? get<T>(k, expected) : fallback;
   }
-  double number(const char* k) const { return get<double>(k, "a number"); }
   double number_or(const char* k, double fallback) const {
     return get_or<double>(k, fallback, "a number");
   }
   double positive(const char* k, double fallback) const {
     const double v = number_or(k, fallback);
-    WEFT_CHECK(std::isfinite(v) && v > 0, file_, ": '", key(k), "' must be > 0, got ", v);
+    WEFT_CHECK(std::isfinite(v) && v > 0, y_.file, ": '", key(k), "' must be > 0, got ", v);
     return v;
   }
   Eigen::VectorXd vector(const char* k, int size) const {
     const YAML::Node n = node_[k];
-    WEFT_CHECK(n, file_, ": missing key '", key(k), "'");
-    WEFT_CHECK(n.IsSequence() && static_cast<int>(n.size()) == size, file_, ": '", key(k),
-               "' must be a list of ", size, " numbers");
+    if (!n) y_.fail_at(node_, key(k), "missing key");
+    if (!n.IsSequence() || static_cast<int>(n.size()) != size)
+      y_.fail_at(n, key(k), "must be a list of " + std::to_string(size) + " numbers");
     Eigen::VectorXd v(size);
     for (int i = 0; i < size; ++i) v[i] = convert<double>(n[i], key(k), "a number");
-    WEFT_CHECK(v.allFinite(), file_, ": '", key(k), "' must be finite");
+    if (!v.allFinite()) y_.fail_at(n, key(k), "must be finite");
     return v;
   }
 
   template <class T>
   T convert(const YAML::Node& n, const std::string& k, const char* expected) const {
+    if (!n.IsScalar()) y_.fail_at(n, k, std::string("must be ") + expected);
     try {
-      WEFT_CHECK(n.IsScalar(), file_, ": '", k, "' must be ", expected);
       return n.as<T>();
     } catch (const YAML::Exception&) {
-      fail(file_, ": '", k, "' must be ", expected, ", got '", n.Scalar(), "'");
+      y_.fail_at(n, k, std::string("must be ") + expected + ", got '" + n.Scalar() + "'");
     }
   }
 
  private:
+  const StrictYaml& y_;
   YAML::Node node_;
-  std::string file_, prefix_;
+  std::string prefix_;
 };
+
+// The floor's meshes (geometry/mesh.h) as the simulator's arrays: 3n positions (metres) and
+// triangles.
+Positions positions_of(const TriangleMesh& m) {
+  return Eigen::Map<const Positions>(m.V.data(), 3 * m.V.rows());
+}
+std::vector<std::array<int, 3>> triangles_of(const TriangleMesh& m) {
+  std::vector<std::array<int, 3>> t(m.F.rows());
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) t[f] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+  return t;
+}
 
 std::string resolve(const std::string& scene_file, const std::string& relative) {
   const fs::path p(relative);
@@ -136,15 +139,13 @@ std::string sequence_path(const std::string& pattern, int frame) {
 
 Scene load_scene(const std::string& path) {
   WEFT_CHECK(fs::exists(path), path, ": scene file not found");
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    fail(path, ": invalid YAML: ", e.what());
-  }
+  StrictYaml yaml;
+  yaml.file = path;
+  yaml.dir = fs::path(path).parent_path();
+  const YAML::Node root = yaml.parse(read_file_bytes(path));
   Scene scene;
   scene.file = path;
-  Section top(root, path, "");
+  Section top(yaml, root, "");
   top.allow({"time_step", "frames", "substeps", "gravity", "cloth", "obstacles", "collision",
              "solver"});
   SimulationSettings& s = scene.settings;
@@ -156,41 +157,14 @@ Scene load_scene(const std::string& path) {
   if (top.has("gravity")) s.gravity = top.vector("gravity", 3);
 
   WEFT_CHECK(top.has("cloth"), path, ": missing key 'cloth'");
-  Section cloth(top.node("cloth"), path, "cloth");
+  Section cloth(yaml, top.node("cloth"), "cloth");
   cloth.allow({"grid", "mesh", "material", "pins", "pin_stiffness", "initial"});
-  if (cloth.has("material")) {
-    Section mat(cloth.node("material"), path, "cloth.material");
-    mat.allow({"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness",
-               "membrane", "compression_ratio", "min_area_ratio"});
-    ClothMaterial& m = s.material;
-    m.density = mat.number_or("density", m.density);
-    WEFT_CHECK(m.density > 0, path, ": 'cloth.material.density' must be > 0 kg/m², got ", m.density);
-    m.youngs_modulus = mat.number_or("youngs_modulus", m.youngs_modulus);
-    WEFT_CHECK(m.youngs_modulus >= 0, path, ": 'cloth.material.youngs_modulus' must be >= 0 Pa, got ",
-               m.youngs_modulus);
-    m.poisson_ratio = mat.number_or("poisson_ratio", m.poisson_ratio);
-    WEFT_CHECK(m.poisson_ratio >= 0 && m.poisson_ratio < 0.5, path,
-               ": 'cloth.material.poisson_ratio' must be in [0, 0.5), got ", m.poisson_ratio);
-    m.bending_stiffness = mat.number_or("bending_stiffness", m.bending_stiffness);
-    WEFT_CHECK(m.bending_stiffness >= 0, path,
-               ": 'cloth.material.bending_stiffness' must be >= 0 N·m, got ", m.bending_stiffness);
-    m.thickness = mat.positive("thickness", m.thickness);
-    const std::string model = mat.get_or<std::string>("membrane", to_string(m.membrane), "a string");
-    WEFT_CHECK(model == "stvk" || model == "tension_field", path,
-               ": 'cloth.material.membrane' must be stvk or tension_field, got '", model, "'");
-    m.membrane = model == "stvk" ? MembraneModel::stvk : MembraneModel::tension_field;
-    m.compression_ratio = mat.number_or("compression_ratio", m.compression_ratio);
-    WEFT_CHECK(std::isfinite(m.compression_ratio) && m.compression_ratio >= 0 && m.compression_ratio <= 1,
-               path, ": 'cloth.material.compression_ratio' must be in [0, 1], got ", m.compression_ratio);
-    m.min_area_ratio = mat.number_or("min_area_ratio", m.min_area_ratio);
-    WEFT_CHECK(std::isfinite(m.min_area_ratio) && m.min_area_ratio >= 0 && m.min_area_ratio < 1, path,
-               ": 'cloth.material.min_area_ratio' must be in [0, 1), got ", m.min_area_ratio);
-  }
+  if (cloth.has("material")) read_cloth_material(yaml, cloth.node("material"), "cloth.material", s.material);
   s.pin_stiffness = cloth.positive("pin_stiffness", s.pin_stiffness);
   WEFT_CHECK(cloth.has("grid") != cloth.has("mesh"), path,
              ": 'cloth' needs exactly one of 'grid' or 'mesh'");
   if (cloth.has("grid")) {
-    Section grid(cloth.node("grid"), path, "cloth.grid");
+    Section grid(yaml, cloth.node("grid"), "cloth.grid");
     grid.allow({"size", "resolution", "origin", "plane"});
     const Eigen::VectorXd size = grid.vector("size", 2);
     const Eigen::VectorXd res = grid.vector("resolution", 2);
@@ -207,26 +181,21 @@ Scene load_scene(const std::string& path) {
     const std::string file = resolve(path, cloth.get<std::string>("mesh", "a file path"));
     WEFT_CHECK(fs::exists(file), path, ": 'cloth.mesh': file not found: ", file);
     const TriangleMesh m = read_obj(file);
-    Positions rest(3 * m.vertices.rows());
-    for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) rest.segment<3>(3 * i) = m.vertices.row(i).transpose();
-    scene.cloth = make_cloth_mesh(rest, m.faces, s.material.density);
+    scene.cloth = make_cloth_mesh(positions_of(m), triangles_of(m), s.material.density);
   }
   scene.initial = scene.initial_previous = scene.cloth.rest;
   if (cloth.has("initial")) {
     // Any state, as network predictions are: stretched, compressed, inside an obstacle.
-    Section init(cloth.node("initial"), path, "cloth.initial");
+    Section init(yaml, cloth.node("initial"), "cloth.initial");
     init.allow({"positions", "previous"});
     auto read_state = [&](const char* k) {
       const std::string key = init.key(k);
       const std::string file = resolve(path, init.get<std::string>(k, "a file path"));
       WEFT_CHECK(fs::exists(file), path, ": '", key, "': file not found: ", file);
       const TriangleMesh m = read_obj(file);
-      WEFT_CHECK(m.vertices.rows() == scene.cloth.num_vertices(), path, ": '", key, "': ", file, " has ",
-                 m.vertices.rows(), " vertices, the cloth has ", scene.cloth.num_vertices());
-      WEFT_CHECK(m.vertices.allFinite(), path, ": '", key, "': ", file, " has a non-finite vertex");
-      Positions x(3 * m.vertices.rows());
-      for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) x.segment<3>(3 * i) = m.vertices.row(i).transpose();
-      return x;
+      WEFT_CHECK(m.num_vertices() == scene.cloth.num_vertices(), path, ": '", key, "': ", file, " has ",
+                 m.num_vertices(), " vertices, the cloth has ", scene.cloth.num_vertices());
+      return positions_of(m);
     };
     scene.initial = read_state("positions");
     scene.initial_previous = init.has("previous") ? read_state("previous") : scene.initial;
@@ -248,7 +217,7 @@ Scene load_scene(const std::string& path) {
     int sequences = 0;
     for (size_t k = 0; k < list.size(); ++k) {
       const std::string prefix = "obstacles[" + std::to_string(k) + "]";
-      Section o(list[k], path, prefix);
+      Section o(yaml, list[k], prefix);
       o.allow({"sphere", "mesh", "mesh_sequence", "inactive_faces", "friction"});
       SceneObstacle ob;
       ob.friction = o.number_or("friction", ob.friction);
@@ -257,7 +226,7 @@ Scene load_scene(const std::string& path) {
       const int kinds = o.has("sphere") + o.has("mesh") + o.has("mesh_sequence");
       WEFT_CHECK(kinds == 1, path, ": '", prefix, "' needs exactly one of sphere, mesh, mesh_sequence");
       if (o.has("sphere")) {
-        Section sp(o.node("sphere"), path, prefix + ".sphere");
+        Section sp(yaml, o.node("sphere"), prefix + ".sphere");
         sp.allow({"center", "radius"});
         ob.kind = SceneObstacle::Kind::sphere;
         ob.sphere.center = sp.vector("center", 3);
@@ -286,14 +255,14 @@ Scene load_scene(const std::string& path) {
     }
   }
   if (top.has("collision")) {
-    Section c(top.node("collision"), path, "collision");
+    Section c(yaml, top.node("collision"), "collision");
     c.allow({"thickness", "stiffness", "friction_velocity"});
     s.collision_thickness = c.positive("thickness", s.collision_thickness);
     s.collision_stiffness = c.positive("stiffness", s.collision_stiffness);
     s.friction_velocity = c.positive("friction_velocity", s.friction_velocity);
   }
   if (top.has("solver")) {
-    Section sv(top.node("solver"), path, "solver");
+    Section sv(yaml, top.node("solver"), "solver");
     sv.allow({"max_iterations", "tolerance", "linear_solver", "cholesky"});
     s.newton.max_iterations = sv.get_or<int>("max_iterations", s.newton.max_iterations, "an integer");
     WEFT_CHECK(s.newton.max_iterations >= 1, path, ": 'solver.max_iterations' must be >= 1");
@@ -316,11 +285,18 @@ Scene load_scene(const std::string& path) {
 namespace {
 
 BodyMesh load_body(const std::string& file, const std::vector<int>& inactive) {
-  TriangleMesh m = read_obj(file);
+  const TriangleMesh m = read_obj(file);
   for (int f : inactive)
-    WEFT_CHECK(f < static_cast<int>(m.faces.size()), file, ": inactive face ", f, " outside [0, ",
-               m.faces.size(), ")");
-  return BodyMesh(std::move(m.vertices), std::move(m.faces), inactive);
+    WEFT_CHECK(f < m.num_faces(), file, ": inactive face ", f, " outside [0, ", m.num_faces(), ")");
+  return BodyMesh(m.V, triangles_of(m), inactive);
+}
+
+// One frame of the cloth as an OBJ (the floor's writer: atomic, shortest round-trip numbers).
+void write_cloth_obj(const std::string& file, const Positions& x, const Faces& faces) {
+  TriangleMesh m;
+  m.V = Eigen::Map<const Vertices>(x.data(), x.size() / 3, 3);
+  m.F = faces;
+  write_obj(file, m);
 }
 
 // JSON has no infinity: a distance with no obstacle to measure against is null.
@@ -374,8 +350,11 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
     std::snprintf(name, sizeof(name), "cloth_%04d.obj", f);
     return (fs::path(out_dir) / name).string();
   };
-  const auto& tris = scene.cloth.triangles;
-  if (!out_dir.empty()) write_obj(obj_path(0), scene.initial, tris);
+  Faces tris(static_cast<Eigen::Index>(scene.cloth.triangles.size()), 3);
+  for (size_t t = 0; t < scene.cloth.triangles.size(); ++t)
+    tris.row(static_cast<Eigen::Index>(t)) << scene.cloth.triangles[t][0], scene.cloth.triangles[t][1],
+        scene.cloth.triangles[t][2];
+  if (!out_dir.empty()) write_cloth_obj(obj_path(0), scene.initial, tris);
 
   SceneRun run;
   const double h = scene.settings.time_step;
@@ -387,9 +366,9 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
     if (sequence) {
       const std::string file = sequence_path(sequence->path, f);
       const TriangleMesh m = read_obj(file);
-      WEFT_CHECK(m.vertices.rows() == body_prev.rows(), file, ": ", m.vertices.rows(),
+      WEFT_CHECK(m.V.rows() == body_prev.rows(), file, ": ", m.V.rows(),
                  " vertices, but frame 0 of the sequence has ", body_prev.rows());
-      body_now = m.vertices;
+      body_now = m.V;
       r = sim.step(x2, x1, &body_prev, &body_now);
       body_prev = body_now;
     } else {
@@ -403,7 +382,7 @@ SceneRun run_scene(const Scene& scene, const std::string& out_dir,
     rec.energy = r.energy;
     rec.step_ms = r.step_ms;
     rec.metrics = frame_metrics(sim, x2, x1, r.x, h);
-    if (!out_dir.empty()) write_obj(obj_path(f), r.x, tris);
+    if (!out_dir.empty()) write_cloth_obj(obj_path(f), r.x, tris);
     x2 = std::move(x1);
     x1 = std::move(r.x);
     if (progress) progress(rec);

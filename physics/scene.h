@@ -10,7 +10,6 @@
 
 #include "physics/cloth_simulator.h"
 #include "physics/cloth_metrics.h"
-#include "physics/obj_io.h"
 
 namespace weft::physics {
 

@@ -1,11 +1,10 @@
 #include "capture/character/appearance.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <numbers>
 
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 #include "graph/error.h"
 
 namespace weft::capture {

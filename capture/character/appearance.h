@@ -21,15 +21,17 @@
 #include <vector>
 
 #include "capture/character/body_skeleton_fit.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 namespace YAML {
 class Node;
 }
 
-namespace weft::capture {
+namespace weft {
+struct StrictYaml;  // files/strict_yaml.h
+}  // namespace weft
 
-struct StrictYaml;
+namespace weft::capture {
 
 struct AppearanceConfig {
   bool textured = false;  // false: no vertex colours (the studio draws flat skin and a red garment)

@@ -1,6 +1,6 @@
 #include "capture/character/attachment.h"
 
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 #include "graph/error.h"
 
 namespace weft::capture {

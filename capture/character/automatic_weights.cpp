@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -1,6 +1,6 @@
 #pragma once
 // Skinning weights for meshes that come without them.
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/character/skeleton.h"
 #include "capture/character/skinning.h"
 

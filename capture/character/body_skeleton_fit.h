@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "capture/character/character.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/character/skeleton.h"
 
 namespace weft::capture {

@@ -1,6 +1,5 @@
 #include "capture/character/character.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -8,10 +7,10 @@
 #include <set>
 
 #include "capture/character/automatic_weights.h"
-#include "capture/io/mesh_io.h"
-#include "capture/io/strict_yaml.h"
+#include "geometry/mesh_io.h"
+#include "files/strict_yaml.h"
 #include "capture/character/skeletool_io.h"
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -168,14 +167,7 @@ void finish_character(Character& ch) {
 
 Character load_character_yaml(const std::string& path) {
   StrictYaml ctx{display_name(path), fs::path(path).parent_path()};
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    fail(path, ": cannot open file for reading");
-  } catch (const YAML::ParserException& e) {
-    fail(ctx.file, ":", e.mark.line + 1, ": invalid YAML: ", e.msg);
-  }
+  const YAML::Node root = ctx.parse(read_file_bytes(path));
   if (!root.IsMap()) fail(ctx.file, ": expected a map of character keys");
   ctx.check_keys(root, "", {"name", "metres_per_unit", "skeleton", "rest_pose", "rest_pose_frame", "body", "cloth", "body25"});
   Character ch;

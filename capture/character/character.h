@@ -11,7 +11,7 @@
 
 #include "capture/character/attachment.h"
 #include "capture/character/embedded_graph.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/io/openpose.h"
 #include "capture/character/skeleton.h"
 #include "capture/character/skinning.h"

@@ -1,6 +1,5 @@
 #include "capture/character/default_character.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <charconv>
@@ -8,13 +7,13 @@
 #include <fstream>
 #include <sstream>
 
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "capture/character/automatic_weights.h"
 #include "capture/character/joint_limits.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/character/skeletool_io.h"
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -248,12 +247,8 @@ std::string yaml_number(double v) {
 std::string write_dressed_base_character(const DefaultCharacter& dc, const DefaultCharacterConfig& cfg,
                                          const fs::path& d) {
   const Character& ch = dc.character;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(cfg.base);
-  } catch (const YAML::Exception& e) {
-    fail(cfg.base, ": cannot read the base character again: ", e.what());
-  }
+  const StrictYaml base_yaml{display_name(cfg.base), fs::path(cfg.base).parent_path()};
+  YAML::Node root = base_yaml.parse(read_file_bytes(cfg.base));
   const fs::path base_dir = fs::path(cfg.base).parent_path();
   auto absolute = [&](YAML::Node node, const char* key) {
     if (node[key]) node[key] = (base_dir / node[key].as<std::string>()).lexically_normal().string();

@@ -8,7 +8,7 @@
 #include <map>
 #include <vector>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 namespace weft::capture {
 

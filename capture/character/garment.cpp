@@ -8,7 +8,7 @@
 #include <numbers>
 
 #include "capture/character/body_skeleton_fit.h"
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 #include "graph/error.h"
 
 namespace weft::capture {

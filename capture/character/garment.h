@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 namespace weft::capture {
 

@@ -11,13 +11,12 @@
 // Angles in the skeleton are radians about the axes of the bind pose (y up, facing +z,
 // the character's left at +x; a ball joint is Rx · Ry · Rz), measured from the bind pose
 // (the A-pose: every dof 0). The root (hips_*) stays free.
-#include <yaml-cpp/yaml.h>
 
 #include <string>
 #include <vector>
 
 #include "capture/character/skeleton.h"
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 
 namespace weft::capture {
 

@@ -6,8 +6,8 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "capture/io/atomic_file.h"
-#include "capture/io/text_reader.h"
+#include "graph/atomic_file.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/character/skeleton.h"
 
 namespace weft::capture {

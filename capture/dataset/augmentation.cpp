@@ -1,6 +1,5 @@
 #include "capture/dataset/augmentation.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -9,7 +8,7 @@
 #include <cmath>
 
 #include "capture/io/portable_random.h"
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 #include "capture/render/photos.h"
 #include "graph/error.h"
 

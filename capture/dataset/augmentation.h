@@ -16,9 +16,11 @@ namespace YAML {
 class Node;
 }
 
-namespace weft::capture {
+namespace weft {
+struct StrictYaml;  // files/strict_yaml.h
+}  // namespace weft
 
-struct StrictYaml;
+namespace weft::capture {
 
 struct AugmentationOptions {
   double shift = 0;       // the crop's centre moves by up to ± shift · crop side on each axis

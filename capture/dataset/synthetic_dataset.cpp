@@ -14,8 +14,8 @@
 
 #include "capture/io/portable_random.h"
 #include "capture/render/renderer.h"
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -8,7 +8,7 @@
 #include "capture/character/attachment.h"
 #include "capture/io/camera.h"
 #include "capture/character/embedded_graph.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "graph/tensor.h"
 #include "ops/geometry.h"
 

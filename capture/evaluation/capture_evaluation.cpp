@@ -20,7 +20,7 @@
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/evaluation/capture_folder.h"
 #include "capture/evaluation/frame_measures.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/render/renderer.h"
 #include "capture/training/capture_networks.h"
 #include "capture/training/multiview_losses.h"

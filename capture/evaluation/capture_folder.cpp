@@ -8,8 +8,8 @@
 #include <set>
 
 #include "capture/character/skeletool_io.h"
-#include "capture/io/mesh_io.h"
-#include "capture/io/text_reader.h"
+#include "geometry/mesh_io.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "capture/io/png_file.h"
 #include "graph/error.h"
 

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/training/multiview_losses.h"
 #include "graph/error.h"

@@ -12,7 +12,7 @@
 #include <map>
 
 #include "capture/character/skeletool_io.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
 #include "capture/evaluation/frame_measures.h"

@@ -1,7 +1,7 @@
 #include "capture/inference/capture_config.h"
 
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
 
 namespace weft::capture {
 

@@ -10,7 +10,7 @@
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/capture_config.h"
 #include "capture/inference/sequence_input.h"
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
 #include "capture/training/model_folder.h"

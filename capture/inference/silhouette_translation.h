@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 
 #include "capture/io/camera.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 namespace weft::capture {
 

@@ -5,8 +5,8 @@
 #include <opencv2/core/eigen.hpp>
 #include <set>
 
-#include "capture/io/atomic_file.h"
-#include "capture/io/text_reader.h"
+#include "graph/atomic_file.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 namespace weft::capture {
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "capture/io/atomic_file.h"
-#include "capture/io/text_reader.h"
+#include "graph/atomic_file.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -7,8 +7,8 @@
 #include <numbers>
 #include <string_view>
 
-#include "capture/io/atomic_file.h"
-#include "capture/io/text_reader.h"
+#include "graph/atomic_file.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

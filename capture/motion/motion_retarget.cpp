@@ -1,6 +1,5 @@
 #include "capture/motion/motion_retarget.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +7,8 @@
 #include <set>
 
 #include "capture/character/character.h"
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -8,8 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "capture/io/atomic_file.h"
-#include "capture/io/mesh_io.h"
+#include "graph/atomic_file.h"
+#include "geometry/mesh_io.h"
 #include "capture/io/png_file.h"
 #include "graph/error.h"
 

@@ -1,6 +1,5 @@
 #include "capture/motion/procedural_motion.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <array>
@@ -9,8 +8,8 @@
 #include <numbers>
 #include <optional>
 
-#include "capture/io/text_reader.h"
-#include "capture/io/strict_yaml.h"
+#include "files/text_reader.h"
+#include "files/strict_yaml.h"
 #include "graph/error.h"
 
 namespace weft::capture {

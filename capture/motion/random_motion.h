@@ -24,14 +24,13 @@
 //
 // Deterministic: one seed gives the same motion on every platform (PortableRandom; every
 // key draws the same number of values whatever the probabilities).
-#include <yaml-cpp/yaml.h>
 
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 #include "capture/motion/generic_humanoid.h"
 
 namespace weft::capture {

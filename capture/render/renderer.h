@@ -34,7 +34,7 @@
 #include <vector>
 
 #include "capture/io/camera.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 namespace weft::capture {
 

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "capture/studio/garment_simulator.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "graph/error.h"

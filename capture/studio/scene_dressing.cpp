@@ -1,6 +1,5 @@
 #include "capture/studio/scene_dressing.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -12,7 +11,7 @@
 
 #include "capture/io/portable_random.h"
 #include "capture/render/photos.h"
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -21,9 +21,11 @@ namespace YAML {
 class Node;
 }
 
-namespace weft::capture {
+namespace weft {
+struct StrictYaml;  // files/strict_yaml.h
+}  // namespace weft
 
-struct StrictYaml;
+namespace weft::capture {
 
 struct StudioLightingConfig {
   double ambient = 0.35;

@@ -21,7 +21,7 @@
 #include <string>
 
 #include "capture/io/camera.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/io/openpose.h"
 #include "capture/io/portable_random.h"  // mix_seed(dataset seed, view, frame)
 

@@ -20,11 +20,12 @@
 #include "capture/character/character.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/io/camera.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "files/strict_yaml.h"
+#include "physics/cloth_material_yaml.h"
+#include "files/text_reader.h"
 #include "capture/motion/bvh.h"
 #include "capture/motion/motion_retarget.h"
 #include "capture/motion/procedural_motion.h"
@@ -106,29 +107,7 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
   if (n["substeps"]) s.substeps = static_cast<int>(y.number(n["substeps"], "simulation.substeps", 1, 100));
   if (n["settle_frames"])
     s.settle_frames = static_cast<int>(y.number(n["settle_frames"], "simulation.settle_frames", 0, 10000));
-  if (const YAML::Node m = n["material"]) {
-    y.check_keys(m, "simulation.material.",
-                 {"density", "youngs_modulus", "poisson_ratio", "bending_stiffness", "thickness", "membrane",
-                  "compression_ratio", "min_area_ratio"});
-    auto& mat = s.material;
-    if (m["density"]) mat.density = y.positive(m["density"], "simulation.material.density");
-    if (m["youngs_modulus"]) mat.youngs_modulus = y.positive(m["youngs_modulus"], "simulation.material.youngs_modulus");
-    if (m["poisson_ratio"])
-      mat.poisson_ratio = y.number(m["poisson_ratio"], "simulation.material.poisson_ratio", 0, 0.499999);
-    if (m["bending_stiffness"])
-      mat.bending_stiffness = y.number(m["bending_stiffness"], "simulation.material.bending_stiffness", 0, 1e6);
-    if (m["thickness"]) mat.thickness = y.positive(m["thickness"], "simulation.material.thickness");
-    if (m["membrane"]) {
-      const std::string model = y.get<std::string>(m["membrane"], "simulation.material.membrane", "a string");
-      if (model != "stvk" && model != "tension_field")
-        y.fail_at(m["membrane"], "simulation.material.membrane", "expected stvk or tension_field, found '" + model + "'");
-      mat.membrane = model == "stvk" ? physics::MembraneModel::stvk : physics::MembraneModel::tension_field;
-    }
-    if (m["compression_ratio"])
-      mat.compression_ratio = y.number(m["compression_ratio"], "simulation.material.compression_ratio", 0, 1);
-    if (m["min_area_ratio"])
-      mat.min_area_ratio = y.number(m["min_area_ratio"], "simulation.material.min_area_ratio", 0, 0.999999);
-  }
+  if (const YAML::Node m = n["material"]) physics::read_cloth_material(y, m, "simulation.material", s.material);
   if (const YAML::Node c = n["collision"]) {
     y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});
     if (c["thickness"]) s.collision_thickness = y.positive(c["thickness"], "simulation.collision.thickness");

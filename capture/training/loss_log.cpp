@@ -11,9 +11,9 @@
 #include <set>
 #include <string_view>
 
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "capture/io/png_file.h"
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -1,15 +1,14 @@
 #include "capture/training/model_folder.h"
 
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <system_error>
 
 #include "capture/dataset/synthetic_dataset.h"
-#include "capture/io/atomic_file.h"
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "graph/atomic_file.h"
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
 #include "nn/safetensors.h"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "capture/character/character.h"
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/training/multiview_supervision.h"
 #include "graph/tensor.h"
 

@@ -7,7 +7,7 @@
 // line) through SimulationWindow::ray_targets.
 #include <vector>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 #include "capture/training/multiview_supervision.h"
 #include "physics/vertex_energies.h"
 

@@ -14,9 +14,9 @@
 
 #include "capture/character/skeletool_io.h"
 #include "capture/deformation/losses.h"
-#include "capture/io/atomic_file.h"
+#include "graph/atomic_file.h"
 #include "capture/io/portable_random.h"
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
 #include "capture/training/capture_networks.h"

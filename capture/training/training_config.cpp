@@ -4,8 +4,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "capture/io/strict_yaml.h"
-#include "capture/io/text_reader.h"
+#include "files/strict_yaml.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
 namespace weft::capture {

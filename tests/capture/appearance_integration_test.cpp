@@ -11,6 +11,7 @@
 #include "capture/studio/studio_rig.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::repo_file;
 using weft::capture::testing::ScratchDir;

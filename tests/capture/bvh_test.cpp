@@ -12,6 +12,7 @@
 #include "capture/motion/motion_retarget.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 

@@ -7,10 +7,11 @@
 
 #include "capture/io/camera.h"
 #include "capture/io/openpose.h"
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using weft::capture::testing::expect_error;

@@ -16,6 +16,7 @@
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 namespace fs = std::filesystem;
 

@@ -21,12 +21,13 @@
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/evaluation/capture_evaluation.h"
 #include "capture/evaluation/evaluation_report.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/studio/synthetic_studio.h"
 #include "capture/training/capture_networks.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 namespace fs = std::filesystem;
 using weft::capture::testing::expect_error;

@@ -16,6 +16,7 @@
 #include "capture/studio/studio_rig.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 namespace physics = weft::physics;
 using weft::capture::testing::expect_error;

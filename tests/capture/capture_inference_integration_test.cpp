@@ -18,7 +18,7 @@
 #include "capture/inference/domain_adaptation.h"
 #include "capture/inference/sequence_capture.h"
 #include "capture/inference/silhouette_translation.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/motion/bvh.h"
 #include "capture/render/renderer.h"
 #include "capture/studio/synthetic_studio.h"
@@ -29,6 +29,7 @@
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 namespace fs = std::filesystem;
 using weft::capture::testing::expect_error;

@@ -19,6 +19,7 @@
 #include "capture/render/renderer.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;

@@ -1,10 +1,11 @@
 #include <gtest/gtest.h>
 
 #include "capture/character/character.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/motion/pose_sequence.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using weft::capture::testing::expect_error;

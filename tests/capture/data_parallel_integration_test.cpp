@@ -33,6 +33,7 @@
 #include "nn/process_group.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 namespace fs = std::filesystem;
 

@@ -7,10 +7,11 @@
 #include <filesystem>
 
 #include "capture/character/character.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/character/skeletool_io.h"
 #include "tests/test_requirements.h"
 
+using namespace weft;
 using namespace weft::capture;
 
 namespace {

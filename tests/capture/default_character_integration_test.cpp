@@ -8,12 +8,13 @@
 #include <memory>
 #include <sstream>
 
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 #include "capture/character/default_character.h"
 #include "capture/motion/motion_retarget.h"
 #include "capture/motion/procedural_motion.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using Eigen::Vector3d;

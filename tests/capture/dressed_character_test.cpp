@@ -10,6 +10,7 @@
 #include "capture/character/default_character.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;

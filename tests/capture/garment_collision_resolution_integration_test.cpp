@@ -16,6 +16,7 @@
 #include "tests/capture/coarse_skirt.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::coarse_skirt;
 using weft::capture::testing::repo_file;

@@ -5,10 +5,11 @@
 
 #include "capture/character/attachment.h"
 #include "capture/character/automatic_weights.h"
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 #include "capture/character/embedded_graph.h"
 #include "graph/error.h"
 
+using namespace weft;
 using namespace weft::capture;
 
 namespace {

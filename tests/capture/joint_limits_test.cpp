@@ -14,6 +14,7 @@
 #include "tests/capture/stick_figure.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using Eigen::Vector3d;

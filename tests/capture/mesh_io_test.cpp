@@ -1,10 +1,11 @@
 #include <gtest/gtest.h>
 
-#include "capture/io/mesh.h"
-#include "capture/io/mesh_io.h"
-#include "capture/io/text_reader.h"
+#include "geometry/mesh.h"
+#include "geometry/mesh_io.h"
+#include "files/text_reader.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using weft::capture::testing::expect_error;

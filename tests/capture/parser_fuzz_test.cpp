@@ -8,12 +8,13 @@
 
 #include "capture/io/camera.h"
 #include "capture/character/character.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/io/openpose.h"
 #include "capture/character/skeletool_io.h"
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 

@@ -11,6 +11,7 @@
 #include "capture/motion/procedural_motion.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 

@@ -14,6 +14,7 @@
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::centre_sampled_silhouette;

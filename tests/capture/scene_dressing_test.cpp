@@ -9,10 +9,11 @@
 #include <filesystem>
 #include <numbers>
 
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 #include "capture/studio/scene_dressing.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;

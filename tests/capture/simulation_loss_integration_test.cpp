@@ -12,13 +12,14 @@
 #include "capture/studio/cloth_perturbation.h"
 #include "capture/studio/garment_simulator.h"
 #include "capture/studio/garment_windows.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/training/silhouette_rays.h"
 #include "capture/training/simulation_loss.h"
 #include "tests/capture/coarse_skirt.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::coarse_skirt;
 using weft::capture::testing::repo_file;

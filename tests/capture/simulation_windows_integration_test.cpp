@@ -20,6 +20,7 @@
 #include "capture/studio/synthetic_studio.h"
 #include "physics/simulation_window.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::physics::Positions;
 using weft::physics::StepStatus;

@@ -7,6 +7,7 @@
 #include "capture/character/skinning.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using weft::capture::testing::expect_error;

@@ -5,6 +5,7 @@
 #include "capture/character/automatic_weights.h"
 #include "capture/character/skinning.h"
 
+using namespace weft;
 using namespace weft::capture;
 
 namespace {

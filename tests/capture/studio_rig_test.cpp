@@ -10,6 +10,7 @@
 #include "capture/studio/studio_rig.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using weft::capture::testing::expect_error;

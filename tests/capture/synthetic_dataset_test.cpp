@@ -14,9 +14,10 @@
 
 #include "capture/render/renderer.h"
 #include "capture/dataset/synthetic_dataset.h"
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;

@@ -13,6 +13,7 @@
 #include "capture/studio/studio_rig.h"
 #include "capture/studio/synthetic_keypoints.h"
 
+using namespace weft;
 using namespace weft::capture;
 
 using weft::capture::testing::kHuman;

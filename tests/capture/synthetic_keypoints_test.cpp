@@ -11,6 +11,7 @@
 #include "capture/studio/synthetic_keypoints.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
 using weft::capture::testing::expect_error;

@@ -18,7 +18,7 @@
 
 #include "capture/io/camera.h"
 #include "capture/character/character.h"
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 #include "capture/io/openpose.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/studio/garment_simulator.h"
@@ -30,6 +30,7 @@
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::centre_sampled_silhouette;
 using weft::capture::testing::opencv_silhouette;

@@ -4,6 +4,7 @@
 #include "capture/studio/synthetic_studio.h"
 #include "tests/capture/test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;

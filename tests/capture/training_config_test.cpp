@@ -7,6 +7,7 @@
 #include "capture/training/training_config.h"
 #include "test_files.h"
 
+using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 

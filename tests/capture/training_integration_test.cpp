@@ -31,6 +31,7 @@
 #include "capture/training/trainer.h"
 #include "nn/checkpoint.h"
 
+using namespace weft;
 using namespace weft::capture;
 namespace fs = std::filesystem;
 

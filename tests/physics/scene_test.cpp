@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "geometry/mesh_io.h"
 #include "graph/error.h"
 #include "physics/scene.h"
 
@@ -181,8 +182,8 @@ solver: {max_iterations: 30, tolerance: 1.0e-4}
   EXPECT_TRUE(doc.contains("summary"));
   // The written frame is the simulated state: pinned corner stays, the rest falls.
   const TriangleMesh last = read_obj((out / "cloth_0003.obj").string());
-  EXPECT_NEAR(last.vertices(0, 1), 1.0, 1e-3);
-  EXPECT_LT(last.vertices(19, 1), 1.0 - 1e-3);
+  EXPECT_NEAR(last.V(0, 1), 1.0, 1e-3);
+  EXPECT_LT(last.V(19, 1), 1.0 - 1e-3);
 }
 
 TEST_F(SceneTest, RunStartsFromTheGivenStateAndVelocity) {
@@ -213,8 +214,8 @@ cloth:
 )"));
   const fs::path out = dir_ / "out";
   run_scene(scene, out.string());
-  EXPECT_NEAR(read_obj((out / "cloth_0000.obj").string()).vertices(7, 1), 1.01, 1e-6);
-  EXPECT_NEAR(read_obj((out / "cloth_0002.obj").string()).vertices(7, 1), 1.03, 1e-6);
+  EXPECT_NEAR(read_obj((out / "cloth_0000.obj").string()).V(7, 1), 1.01, 1e-6);
+  EXPECT_NEAR(read_obj((out / "cloth_0002.obj").string()).V(7, 1), 1.03, 1e-6);
 }
 
 TEST(SequencePath, FormatsTheFrameNumber) {

@@ -1,9 +1,9 @@
-#include "capture/io/strict_yaml.h"
+#include "files/strict_yaml.h"
 
 #include <algorithm>
 #include <sstream>
 
-namespace weft::capture {
+namespace weft {
 
 void StrictYaml::fail_at(const YAML::Node& node, const std::string& key, const std::string& msg) const {
   const YAML::Mark m = node.Mark();
@@ -83,4 +83,4 @@ YAML::Node StrictYaml::parse(const std::string& text) const {
   }
 }
 
-}  // namespace weft::capture
+}  // namespace weft

@@ -1,4 +1,4 @@
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -6,7 +6,7 @@
 
 #include "graph/error.h"
 
-namespace weft::capture {
+namespace weft {
 
 void validate_mesh(const TriangleMesh& mesh, const std::string& what) {
   const int n = mesh.num_vertices();
@@ -114,4 +114,4 @@ TriangleMesh uv_sphere(const Eigen::Vector3d& centre, double radius, int rings, 
   return m;
 }
 
-}  // namespace weft::capture
+}  // namespace weft

@@ -1,12 +1,14 @@
 #pragma once
 // Closest points on triangle meshes: the point–triangle primitive and a query structure
-// for many points against one mesh (used by attachment and weight transfer).
+// for many points against one mesh (used by attachment, weight transfer and the
+// penetration measures). physics::BodyMesh keeps its own AABB tree with signed distances
+// and refits: the simulator's obstacle query, tuned for the drape.
 #include <Eigen/Core>
 #include <vector>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
-namespace weft::capture {
+namespace weft {
 
 // Closest point on triangle (a, b, c) to p, with its barycentric weights (sum 1, all ≥ 0).
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
@@ -35,4 +37,4 @@ class ClosestTriangleQuery {
   Eigen::VectorXd radii_;
 };
 
-}  // namespace weft::capture
+}  // namespace weft

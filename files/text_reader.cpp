@@ -1,4 +1,4 @@
-#include "capture/io/text_reader.h"
+#include "files/text_reader.h"
 
 #include <cctype>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace weft::capture {
+namespace weft {
 
 std::string read_file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -123,4 +123,4 @@ void TextReader::expect_min_tokens(size_t n, std::string_view what) const {
     fail("expected at least ", n, " fields (", what, "), found ", tokens_.size());
 }
 
-}  // namespace weft::capture
+}  // namespace weft

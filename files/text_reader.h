@@ -1,6 +1,6 @@
 #pragma once
 // Line-by-line reading of text formats with errors that name "file:line: what".
-// Every capture parser uses it, so that a malformed file gets one clear weft::Error
+// Every parser of weft's text formats uses it, so that a malformed file gets one clear weft::Error
 // and never a crash: numbers are parsed strictly (no NaN/inf, no trailing junk).
 #include <charconv>
 #include <string>
@@ -9,7 +9,7 @@
 
 #include "graph/error.h"
 
-namespace weft::capture {
+namespace weft {
 
 // Reads a whole file into memory; throws weft::Error naming the file when unreadable.
 std::string read_file_bytes(const std::string& path);
@@ -70,4 +70,4 @@ class TextReader {
 bool parse_double(std::string_view token, double& value);
 bool parse_int(std::string_view token, long long& value);
 
-}  // namespace weft::capture
+}  // namespace weft

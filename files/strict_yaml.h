@@ -1,6 +1,7 @@
 #pragma once
-// Strict reading of hand-written YAML configs (character.yaml, retarget mappings, motion
-// specs): unknown keys, wrong types and out-of-range values are errors that name the
+// Strict reading of hand-written YAML, the one YAML reader of weft (`weft sim` scenes,
+// character.yaml, retarget mappings, motion specs, synth and training configs, model
+// folders): unknown keys, wrong types and out-of-range values are errors that name the
 // file, the line and the key, with what was expected.
 #include <yaml-cpp/yaml.h>
 
@@ -12,7 +13,7 @@
 
 #include "graph/error.h"
 
-namespace weft::capture {
+namespace weft {
 
 // A section's numeric key: the field it sets and the range it allows.
 struct NumberKey {
@@ -63,4 +64,4 @@ struct StrictYaml {
   YAML::Node parse(const std::string& text) const;
 };
 
-}  // namespace weft::capture
+}  // namespace weft

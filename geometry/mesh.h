@@ -1,11 +1,13 @@
 #pragma once
 // Triangle meshes: plain Eigen arrays, row-major so that a vertex is 3 contiguous
-// doubles and V.data() is an N×3 C array. Units are the character's (ddc: millimetres).
+// doubles and V.data() is an N×3 C array. Units are the user's: a character's (ddc:
+// millimetres) in capture/, metres in physics/. The one mesh type of weft, below physics/
+// and capture/.
 #include <Eigen/Core>
 #include <string>
 #include <vector>
 
-namespace weft::capture {
+namespace weft {
 
 using Vertices = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using Faces = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
@@ -49,4 +51,4 @@ Edges unique_edges(const Faces& F);
 // Per-vertex neighbour lists from the faces, each sorted.
 std::vector<std::vector<int>> vertex_adjacency(const Faces& F, int num_vertices);
 
-}  // namespace weft::capture
+}  // namespace weft

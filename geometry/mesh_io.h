@@ -10,9 +10,9 @@
 // ASCII PLY) or byte offset (binary PLY) and what was expected.
 #include <string>
 
-#include "capture/io/mesh.h"
+#include "geometry/mesh.h"
 
-namespace weft::capture {
+namespace weft {
 
 TriangleMesh read_obj(const std::string& path);
 TriangleMesh parse_obj(std::string text, const std::string& name);
@@ -28,4 +28,4 @@ void write_ply(const std::string& path, const TriangleMesh& mesh,
 TriangleMesh read_mesh(const std::string& path);
 void write_mesh(const std::string& path, const TriangleMesh& mesh);
 
-}  // namespace weft::capture
+}  // namespace weft

@@ -1,4 +1,4 @@
-#include "capture/io/mesh_io.h"
+#include "geometry/mesh_io.h"
 
 #include <fmt/format.h>
 
@@ -11,11 +11,11 @@
 #include <iomanip>
 #include <sstream>
 
-#include "capture/io/atomic_file.h"
-#include "capture/io/text_reader.h"
+#include "graph/atomic_file.h"
+#include "files/text_reader.h"
 #include "graph/error.h"
 
-namespace weft::capture {
+namespace weft {
 
 // ---------------------------------------------------------------- OBJ
 
@@ -480,4 +480,4 @@ void write_mesh(const std::string& path, const TriangleMesh& mesh) {
   fail(path, ": unknown mesh format '", ext, "' (expected .obj or .ply)");
 }
 
-}  // namespace weft::capture
+}  // namespace weft

@@ -1,10 +1,10 @@
-#include "capture/io/closest_point.h"
+#include "geometry/closest_point.h"
 
 #include <limits>
 
 #include "graph/error.h"
 
-namespace weft::capture {
+namespace weft {
 
 // Region-based closest point (Ericson, Real-Time Collision Detection, §5.1.5).
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
@@ -99,4 +99,4 @@ ClosestPoint ClosestTriangleQuery::closest(const Eigen::Vector3d& p) const {
   return best;
 }
 
-}  // namespace weft::capture
+}  // namespace weft
