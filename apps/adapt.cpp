@@ -1,5 +1,5 @@
 // `weft adapt`: domain adaptation of a trained model on the test sequence before capture
-// (capture/inference/domain_adaptation.h; docs/CAPTURE.md).
+// (capture/adaptation/domain_adaptation.h; docs/CAPTURE.md).
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/spdlog.h>
 
@@ -9,7 +9,7 @@
 
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
-#include "capture/inference/domain_adaptation.h"
+#include "capture/adaptation/domain_adaptation.h"
 
 namespace weft::apps {
 

@@ -11,7 +11,7 @@
 #include "apps/commands.h"
 #include "apps/progress_bar.h"
 #include "graph/atomic_file.h"
-#include "capture/evaluation/split_evaluation.h"
+#include "capture/training/split_evaluation.h"
 #include "capture/training/trainer.h"
 #include "graph/error.h"
 #include "graph/threads.h"

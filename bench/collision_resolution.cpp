@@ -32,9 +32,9 @@
 #include "bench/bench_clock.h"
 #include "capture/io/portable_random.h"
 #include "capture/studio/cloth_perturbation.h"
-#include "capture/studio/garment_collision_resolution.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_collision_resolution.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
 #include "graph/error.h"
 #include "graph/threads.h"
 

@@ -4,7 +4,7 @@
 // 3 cm, patches pushed 2 cm into the body, noisy velocities; capture/studio/cloth_perturbation.h)
 // and simulates FRAMES frames (default 2: a window of F = 3 frames) following the
 // ground-truth body and waistband, with the simulator built exactly as the synth built
-// the dataset's (capture/studio/garment_simulator.h).
+// the dataset's (capture/garment/garment_simulator.h).
 //   Robustness: N windows (default 500) at seeded random starts, one at a time on one
 //   thread: each window's statuses, the failures (status != converged) with their window
 //   id, a NaN check, the deepest vertex inside the body at the end of every converged
@@ -30,8 +30,8 @@
 
 #include "bench/bench_clock.h"
 #include "capture/studio/cloth_perturbation.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
 #include "capture/io/portable_random.h"
 #include "graph/error.h"
 #include "graph/threads.h"

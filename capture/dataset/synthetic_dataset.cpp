@@ -233,6 +233,12 @@ std::string dataset_mask_path(const DatasetInfo& info, int frame, const std::str
 std::string dataset_keypoints_path(const DatasetInfo& info, int frame, const std::string& view) {
   return join(info.dir, "keypoints", view, frame_id(frame) + "_keypoints.json");
 }
+std::string dataset_frame_name(int frame) {
+  char buf[16];
+  std::snprintf(buf, sizeof(buf), "%04d", frame);
+  return buf;
+}
+
 std::string dataset_camera_name(const DatasetInfo& info, int frame, const std::string& view) {
   return info.camera_per_frame ? view + "_" + frame_id(frame) : view;
 }

@@ -92,6 +92,9 @@ std::string dataset_image_path(const DatasetInfo& info, int frame, const std::st
 std::string dataset_mask_path(const DatasetInfo& info, int frame, const std::string& view);
 std::string dataset_keypoints_path(const DatasetInfo& info, int frame, const std::string& view);
 // Name of the camera of a frame and view in cameras.yaml: the view, or <view>_<frame:04d>.
+// A frame's name in the layout's file names (docs/DATASET.md): "0007".
+std::string dataset_frame_name(int frame);
+
 std::string dataset_camera_name(const DatasetInfo& info, int frame, const std::string& view);
 // One view's keypoints (Body25::Zero() when nobody is detected; more than one person is an
 // error) and foreground mask (CV_8UC1 0/255 of the dataset's image size); errors name the file.

@@ -22,8 +22,8 @@
 #include "capture/evaluation/frame_measures.h"
 #include "geometry/mesh_io.h"
 #include "capture/render/renderer.h"
-#include "capture/training/capture_networks.h"
-#include "capture/training/multiview_losses.h"
+#include "capture/model/capture_networks.h"
+#include "capture/render/silhouette_iou.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -138,7 +138,7 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     } else {
       WEFT_CHECK(fs::exists(path), path, ": no such synth config (from ",
                  o.synth_config.empty() ? cap_json + "'s synth_config" : std::string("--synth-config"), ")");
-      simulation = load_synth_config(path).simulation;
+      simulation = load_simulation_config(path);
       e.synth_config = path;
       with_oob = true;
     }

@@ -13,7 +13,7 @@
 //
 // frames[i].id is the frame of the sequence (the dataset's frame id) the prediction is of;
 // pivot is the predicted world position (character units) of the root chain's last joint
-// (capture/training/capture_networks.h, PoseParametrisation::pivot_joint).
+// (capture/model/capture_networks.h, PoseParametrisation::pivot_joint).
 // Every reader throws one weft::Error naming the file and what was expected.
 #include <Eigen/Core>
 #include <string>

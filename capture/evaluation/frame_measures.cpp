@@ -8,8 +8,8 @@
 #include <limits>
 
 #include "geometry/closest_point.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/training/multiview_losses.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/render/silhouette_iou.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -111,7 +111,8 @@ std::vector<double> silhouette_ious(const Character& ch, const Vertices& body, c
              " masks");
   std::vector<double> iou(cameras.size());
   tbb::parallel_for(size_t(0), cameras.size(), [&](size_t k) {
-    iou[k] = rendered_silhouette_iou(cameras[k], ch, body, cloth, masks[k]);
+    iou[k] = rendered_silhouette_iou(cameras[k], ch.body.mesh, body, ch.has_cloth() ? &ch.cloth->mesh : nullptr, cloth,
+                                     masks[k]);
   });
   return iou;
 }

@@ -5,7 +5,7 @@
 // - vertex distance to the ground truth (mm) and the joint error over the mapped BODY_25
 //   keypoints (MPJPE, mm);
 // - penetration of cloth vertices into the body's active faces (those the simulator
-//   collides with; capture/studio/garment_simulator.h body_obstacle);
+//   collides with; capture/garment/garment_simulator.h body_obstacle);
 // - out-of-balance force m·a − (f_int + f_ext + f_coll) of the newest of three
 //   consecutive frames (physics/cloth_metrics.h), a from their centred difference, with
 //   the garment simulator of a synth config's simulation section: the predicted body of
@@ -21,8 +21,8 @@
 
 #include "capture/character/character.h"
 #include "capture/io/camera.h"
-#include "capture/studio/garment_windows.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/garment/garment_config.h"
+#include "capture/garment/garment_windows.h"
 #include "physics/cloth_metrics.h"
 
 namespace weft::capture {

@@ -1,5 +1,5 @@
 #include "capture/inference/frame_source.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/dataset/synthetic_dataset.h"
 
 #include <opencv2/imgcodecs.hpp>
 

@@ -1,5 +1,5 @@
 #pragma once
-// The root chain's dofs of a capture. CaptureModel (capture/training/capture_networks.h)
+// The root chain's dofs of a capture. CaptureModel (capture/model/capture_networks.h)
 // keeps the root chain at rest and places the posed skeleton rigidly:
 //   X_world = R (X − p0) + t.
 // A .motion file or BVH needs that placement as dofs. It is the root chain's pose whose
@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 
 #include "capture/character/character.h"
-#include "capture/training/capture_networks.h"
+#include "capture/model/capture_networks.h"
 
 namespace weft::capture {
 

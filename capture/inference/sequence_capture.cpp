@@ -24,10 +24,10 @@
 #include "capture/io/png_file.h"
 #include "capture/motion/skeleton_bvh.h"
 #include "capture/render/renderer.h"
-#include "capture/studio/garment_collision_resolution.h"
-#include "capture/training/capture_networks.h"
-#include "capture/training/model_folder.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/garment/garment_collision_resolution.h"
+#include "capture/garment/garment_config.h"
+#include "capture/model/capture_networks.h"
+#include "capture/model/model_folder.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
 
@@ -136,11 +136,11 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   const ModelFolder model = read_model_folder(o.model);
   const CaptureConfig cfg = o.config.empty() ? CaptureConfig{} : load_capture_config(o.config);
   const Character character = load_character(model.character);
-  CaptureNetworks nets(character, model.config.network, model.config.seed);
+  CaptureNetworks nets(character, model.network, model.seed);
   load_capture_networks(model.weights, nets);
   nets.pose_net->train(false);
   nets.deformation_net->train(false);
-  const CaptureModel capture_model(character, model.config.network);
+  const CaptureModel capture_model(character, model.network);
   SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, cfg.keying});
   WEFT_CHECK(!o.out.empty(), "weft infer: no output folder");
   const fs::path out(o.out);
@@ -148,15 +148,15 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   if (cfg.overlays) fs::create_directories(out / "overlays");
   const double fps = o.fps > 0 ? o.fps : input.source().fps() > 0 ? input.source().fps() : 30.0;
   spdlog::info("model {} ({} at {}², weights {}); character {}: {} body + {} cloth vertices", o.model,
-               model.config.network.backbone, model.config.network.input_size, model.weights, character.name,
+               model.network.backbone, model.network.input_size, model.weights, character.name,
                character.body.mesh.num_vertices(), character.has_cloth() ? character.cloth->mesh.num_vertices() : 0);
   spdlog::info("{}", input.describe());
   clock.lap("load");
 
   // Pass 1: crops and both networks, batched.
   DatasetOptions crop_options;
-  crop_options.input_size = model.config.network.input_size;
-  crop_options.margin = model.config.network.margin;
+  crop_options.input_size = model.network.input_size;
+  crop_options.margin = model.network.margin;
   std::vector<FrameRecord> frames;
   std::vector<Eigen::VectorXd> pose_rows, deformation_rows;
   const std::vector<double>& keypoint_mask = capture_model.keypoint_mask();
@@ -216,7 +216,7 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
     WEFT_CHECK(!model.synth_config.empty(), o.model,
                "/model.yaml: no synth_config, so no garment material for --resolve-collisions (train with "
                "physics.synth_config set)");
-    resolver = std::make_unique<GarmentCollisionResolver>(character, load_synth_config(model.synth_config).simulation);
+    resolver = std::make_unique<GarmentCollisionResolver>(character, load_simulation_config(model.synth_config));
   }
 
   // Pass 2: the deformation layer, placement and files.

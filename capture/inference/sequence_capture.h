@@ -1,5 +1,5 @@
 #pragma once
-// `weft infer`: a trained model (capture/training/model_folder.h) captures a single-camera
+// `weft infer`: a trained model (capture/model/model_folder.h) captures a single-camera
 // sequence, frame by frame, as the paper tests (../shared/DESIGN.md, "Testing"):
 //  1. frames from a video or an image folder (frame_source.h);
 //  2. the person's mask: a given mask folder, else green-screen keying (green_screen.h);
@@ -37,7 +37,7 @@ struct CaptureOptions {
   double fps = 0;           // frame rate for pose.bvh and the video (0: the video's, else 30)
   int max_frames = -1;      // stop after this many frames (−1: all)
   // The paper's optional final collision resolution: cloth vertices pushed out of the body
-  // (capture/studio/garment_collision_resolution.h) with the garment material of the
+  // (capture/garment/garment_collision_resolution.h) with the garment material of the
   // model's synth config; needs a model trained with one (physics.synth_config).
   bool resolve_collisions = false;
 };

@@ -9,7 +9,7 @@
 
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/green_screen.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/dataset/synthetic_dataset.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -19,17 +19,17 @@
 
 #include "capture/character/character.h"
 #include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
 #include "capture/io/camera.h"
 #include "geometry/mesh_io.h"
 #include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
 #include "files/strict_yaml.h"
-#include "physics/cloth_material_yaml.h"
 #include "files/text_reader.h"
 #include "capture/motion/bvh.h"
 #include "capture/motion/motion_retarget.h"
 #include "capture/motion/procedural_motion.h"
-#include "capture/studio/garment_simulator.h"
+#include "capture/garment/garment_simulator.h"
 #include "graph/atomic_file.h"
 #include "graph/error.h"
 #include "physics/cloth_metrics.h"
@@ -97,33 +97,6 @@ void parse_motions(const StrictYaml& y, const YAML::Node& root, SynthConfig& c) 
       y.fail_at(list[i]["fps"] ? list[i]["fps"] : list[i], key + ".fps", msg.str());
     }
   }
-}
-
-void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationConfig& s) {
-  y.check_keys(n, "simulation.", {"enabled", "substeps", "settle_frames", "material", "collision", "pins", "solver",
-                                  "max_penetration", "friction"});
-  if (n["friction"]) s.friction = y.number(n["friction"], "simulation.friction", 0, 10);
-  if (n["enabled"]) s.enabled = y.get<bool>(n["enabled"], "simulation.enabled", "true or false");
-  if (n["substeps"]) s.substeps = static_cast<int>(y.number(n["substeps"], "simulation.substeps", 1, 100));
-  if (n["settle_frames"])
-    s.settle_frames = static_cast<int>(y.number(n["settle_frames"], "simulation.settle_frames", 0, 10000));
-  if (const YAML::Node m = n["material"]) physics::read_cloth_material(y, m, "simulation.material", s.material);
-  if (const YAML::Node c = n["collision"]) {
-    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});
-    if (c["thickness"]) s.collision_thickness = y.positive(c["thickness"], "simulation.collision.thickness");
-    if (c["stiffness"]) s.collision_stiffness = y.positive(c["stiffness"], "simulation.collision.stiffness");
-  }
-  if (const YAML::Node p = n["pins"]) {
-    y.check_keys(p, "simulation.pins.", {"stiffness"});
-    if (p["stiffness"]) s.pin_stiffness = y.positive(p["stiffness"], "simulation.pins.stiffness");
-  }
-  if (const YAML::Node v = n["solver"]) {
-    y.check_keys(v, "simulation.solver.", {"max_iterations", "tolerance"});
-    if (v["max_iterations"])
-      s.max_iterations = static_cast<int>(y.number(v["max_iterations"], "simulation.solver.max_iterations", 1, 10000));
-    if (v["tolerance"]) s.tolerance = y.positive(v["tolerance"], "simulation.solver.tolerance");
-  }
-  if (n["max_penetration"]) s.max_penetration = y.positive(n["max_penetration"], "simulation.max_penetration");
 }
 
 void parse_render(const StrictYaml& y, const YAML::Node& n, SynthRenderConfig& r) {
@@ -420,12 +393,6 @@ ClipSplit split_clip(int first, int end, double val_fraction, double test_fracti
   return s;
 }
 
-std::string dataset_frame_name(int frame) {
-  char buf[16];
-  std::snprintf(buf, sizeof(buf), "%04d", frame);
-  return buf;
-}
-
 int SynthConfig::frames() const {
   int n = 0;
   for (const SynthMotionConfig& m : motions) n += m.frames;
@@ -451,7 +418,7 @@ SynthConfig parse_synth_config(const std::string& text, const std::string& name)
   if (!root["character"]) y.fail_at(root, "character", "missing: a default-character config (configs/characters/*.yaml)");
   c.character = y.path(root["character"], "character");
   parse_motions(y, root, c);
-  if (root["simulation"]) parse_simulation(y, root["simulation"], c.simulation);
+  if (root["simulation"]) parse_simulation_config(y, root["simulation"], c.simulation);
   if (root["cameras"]) parse_camera_setup(y, root["cameras"], c.cameras);
   if (root["render"]) parse_render(y, root["render"], c.render);
   if (root["keypoints"]) parse_keypoint_noise(y, root["keypoints"], c.keypoints);

@@ -19,7 +19,7 @@
 #include "capture/studio/scene_dressing.h"
 #include "capture/studio/studio_rig.h"
 #include "capture/studio/synthetic_keypoints.h"
-#include "physics/cloth_model.h"
+#include "capture/garment/garment_config.h"
 
 namespace weft::capture {
 
@@ -38,25 +38,6 @@ struct SynthMotionConfig {
   // fit: a steady walk becomes a walk on a treadmill; 0 takes away all horizontal root
   // motion). < 0 (the default): the motion's own path.
   double in_place_s = -1;
-};
-
-struct SynthSimulationConfig {
-  bool enabled = true;     // false: the garment is skinned, not simulated
-  int substeps = 1;        // implicit Euler steps per frame (> 1: the frame-level out-of-balance
-                           // force then includes the sub-stepping error)
-  int settle_frames = 15;  // frames simulated at the first pose before the motion starts
-  physics::ClothMaterial material{0.15, 2.0e5, 0.3, 2.0e-6, 0.001};
-  double collision_thickness = 0.004;  // m
-  double collision_stiffness = 1.0e4;  // N/m
-  double pin_stiffness = 1.0e4;        // N/m
-  double friction = 0.3;               // Coulomb coefficient of the garment on the body (skin)
-  // Newton iterations per step. A body stepping into the skirt cuts every step through
-  // the collision step filter (a global α), so such steps take 50–150 iterations to
-  // converge (measured on training.yaml, frames 33–49): with a cap of 50 the first of them
-  // stopped out of balance and every later frame failed after it.
-  int max_iterations = 200;
-  double tolerance = 1e-3;             // relative to each vertex's weight
-  double max_penetration = 0.01;       // m: a frame deeper than this counts as failed
 };
 
 enum class CameraRigKind { studio, wild };
@@ -148,8 +129,5 @@ struct ClipSplit {
   std::vector<int> train, val, test;
 };
 ClipSplit split_clip(int first, int end, double val_fraction, double test_fraction, double place);
-
-// File names of the layout (docs/DATASET.md).
-std::string dataset_frame_name(int frame);  // "0007"
 
 }  // namespace weft::capture

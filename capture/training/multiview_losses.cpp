@@ -3,6 +3,8 @@
 #include <tbb/parallel_for.h>
 
 #include "capture/deformation/losses.h"
+#include "capture/model/capture_networks.h"
+#include "capture/render/silhouette_iou.h"
 #include "capture/render/renderer.h"
 #include "graph/error.h"
 #include "ops/geometry.h"
@@ -17,37 +19,6 @@ namespace {
 Tensor batch_row(const Tensor& t, int64_t b) { return ops::slice(t, 0, b, b + 1); }
 
 }  // namespace
-
-bool in_front(const Camera& camera, const Vertices& V) {
-  for (int i = 0; i < V.rows(); ++i)
-    if (camera.depth(V.row(i).transpose()) <= 1e-6) return false;
-  return true;
-}
-
-double rendered_silhouette_iou(const Camera& camera, const Character& ch, const Vertices& body, const Vertices* cloth,
-                               const cv::Mat& mask) {
-  if (!in_front(camera, body)) return 0.0;
-  std::vector<RenderMesh> meshes(1);
-  meshes[0].mesh = &ch.body.mesh;
-  meshes[0].vertices = &body;
-  if (cloth) {
-    meshes.emplace_back();
-    meshes[1].mesh = &ch.cloth->mesh;
-    meshes[1].vertices = cloth;
-    meshes[1].part = 2;
-  }
-  return mask_iou(render(camera, meshes).mask, mask);
-}
-
-Vertices sample_vertices(const Tensor& vertices, int64_t b) {
-  WEFT_CHECK(vertices.dim() == 3 && vertices.size(2) == 3 && b >= 0 && b < vertices.size(0),
-             "sample_vertices: expected [B,V,3] and b < B, got ", shape_str(vertices.shape()), " and ", b);
-  const int64_t V = vertices.size(1);
-  Vertices out(V, 3);
-  const float* p = vertices.data<float>() + b * V * 3;
-  for (int64_t i = 0; i < V * 3; ++i) out.data()[i] = p[i];
-  return out;
-}
 
 Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& frames,
                                const MultiviewSupervision& sup, const std::vector<double>& mask,

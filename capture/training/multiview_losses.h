@@ -12,7 +12,7 @@
 
 #include "capture/character/character.h"
 #include "geometry/mesh.h"
-#include "capture/training/multiview_supervision.h"
+#include "capture/dataset/multiview_supervision.h"
 #include "graph/tensor.h"
 
 namespace weft::capture {
@@ -31,15 +31,5 @@ Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& 
 Tensor multiview_silhouette_loss(const Tensor& vertices, const Faces& faces, const std::vector<int>& frames,
                                  const MultiviewSupervision& supervision);
 
-// A batch's vertices as plain Eigen (sample b of [B,V,3]).
-Vertices sample_vertices(const Tensor& vertices, int64_t b);
-
-// Every vertex in front of the camera (projection refuses points behind it).
-bool in_front(const Camera& camera, const Vertices& V);
-
-// IoU of the rendered body (and cloth, when given) against `mask` (the camera's size);
-// 0 when the body is not wholly in front of the camera.
-double rendered_silhouette_iou(const Camera& camera, const Character& character, const Vertices& body,
-                               const Vertices* cloth, const cv::Mat& mask);
 
 }  // namespace weft::capture

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "geometry/mesh.h"
-#include "capture/training/multiview_supervision.h"
+#include "capture/dataset/multiview_supervision.h"
 #include "physics/vertex_energies.h"
 
 namespace weft::capture {

@@ -1,7 +1,7 @@
 #include "capture/training/simulation_loss.h"
 
-#include "capture/studio/garment_collision_resolution.h"
-#include "capture/studio/garment_simulator.h"
+#include "capture/garment/garment_collision_resolution.h"
+#include "capture/garment/garment_simulator.h"
 #include "graph/error.h"
 #include "physics/collision_resolution.h"
 

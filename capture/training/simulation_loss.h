@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "capture/character/character.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/garment/garment_config.h"
 #include "physics/simulation_window.h"
 
 namespace weft::capture {

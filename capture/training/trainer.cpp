@@ -17,11 +17,13 @@
 #include "graph/atomic_file.h"
 #include "capture/io/portable_random.h"
 #include "files/text_reader.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
-#include "capture/training/capture_networks.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
+#include "capture/model/capture_networks.h"
 #include "capture/training/loss_log.h"
-#include "capture/training/model_folder.h"
+#include "capture/model/model_folder.h"
+#include "capture/training/model_folder_writer.h"
+#include "capture/render/silhouette_iou.h"
 #include "capture/training/multiview_losses.h"
 #include "capture/training/silhouette_rays.h"
 #include "capture/training/simulation_loss.h"
@@ -519,10 +521,12 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
       const Vertices body = sample_vertices(p.body, b);
       Vertices cloth;
       if (p.cloth.defined()) cloth = sample_vertices(p.cloth, b);
+      const TriangleMesh* cloth_mesh = p.cloth.defined() ? &character_.cloth->mesh : nullptr;
       std::vector<double> ious(supervision_->views());
       tbb::parallel_for(0, supervision_->views(), [&](int v) {
-        ious[v] = rendered_silhouette_iou(supervision_->silhouette_camera(frame, v), character_, body,
-                                          p.cloth.defined() ? &cloth : nullptr, supervision_->mask(frame, v));
+        ious[v] = rendered_silhouette_iou(supervision_->silhouette_camera(frame, v), character_.body.mesh, body,
+                                          cloth_mesh, cloth_mesh ? &cloth : nullptr,
+                                          supervision_->mask(frame, v));
       });
       for (double x : ious) iou_sum += x, ++iou_n;
       if (p.cloth.defined()) {
@@ -688,8 +692,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
                    stage_start + s.steps, s.batch_size, s.lr);
       if (s.kind == StageKind::physics) {
         WEFT_CHECK(character_.has_cloth(), info_.character, ": the physics stage needs a garment");
-        const SynthConfig synth = load_synth_config(cfg_.physics.synth_config);
-        SynthSimulationConfig sim = synth.simulation;
+        SynthSimulationConfig sim = load_simulation_config(cfg_.physics.synth_config);
         sim.max_iterations = cfg_.physics.max_iterations;
         sim.tolerance = cfg_.physics.tolerance;
         simulator_ = garment_simulator_factory(character_, sim, info_.fps, cfg_.physics.ray_stiffness);

@@ -90,20 +90,7 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
             {"seed", "network", "stages", "oracle_pose", "physics", "augmentation"});
   if (root["augmentation"]) c.augmentation = parse_augmentation(y, root["augmentation"], "augmentation");
   if (root["oracle_pose"]) c.oracle_pose = y.get<bool>(root["oracle_pose"], "oracle_pose", "true or false");
-  if (const YAML::Node n = root["network"]) {
-    NetworkConfig& m = c.network;
-    y.numbers(n, "network.",
-              {{"margin", &m.margin, 0, 2},
-               {"dof_scale", &m.dof_scale, 1e-6, 100},
-               {"angle_scale", &m.angle_scale, 1e-6, 100},
-               {"translation_scale_m", &m.translation_scale_m, 1e-6, 100}},
-              {{"input_size", &m.input_size, 32, 1024}}, {"backbone"});
-    if (n["backbone"]) {
-      m.backbone = y.get<std::string>(n["backbone"], "network.backbone", "resnet18, resnet34 or resnet50");
-      if (m.backbone != "resnet18" && m.backbone != "resnet34" && m.backbone != "resnet50")
-        y.fail_at(n["backbone"], "network.backbone", "expected resnet18, resnet34 or resnet50, found '" + m.backbone + "'");
-    }
-  }
+  if (root["network"]) parse_network_config(y, root["network"], c.network);
   for (StageKind kind : {StageKind::pose, StageKind::warmup, StageKind::physics}) {
     StageConfig s;
     s.kind = kind;
@@ -137,6 +124,10 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
 
 TrainingConfig load_training_config(const std::string& path) {
   return parse_training_config(read_file_bytes(path), path);
+}
+
+TrainingConfig model_training_config(const ModelFolder& model) {
+  return parse_training_config(read_file_bytes(model.config), model.config, model.config_dir);
 }
 
 }  // namespace weft::capture

@@ -8,7 +8,8 @@
 #include <vector>
 
 #include "capture/dataset/augmentation.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/model/model_folder.h"
+#include "capture/model/network_config.h"
 
 namespace weft::capture {
 
@@ -35,15 +36,6 @@ struct StageConfig {
   double weight_decay = 0;
   double final_lr_fraction = 0.1;  // cosine decay of the rate to this fraction at the stage's end
   LossWeights weights;
-};
-
-struct NetworkConfig {
-  std::string backbone = "resnet18";  // resnet18 | resnet34 | resnet50
-  int input_size = 128;               // crops are input_size² pixels
-  double margin = 0.15;               // crop margin around the person (dataset reader)
-  double dof_scale = 0.1;             // PoseNet: dof = rest + dof_scale · output (radians, units); limited dofs: pose_dofs.h
-  double angle_scale = 0.05;          // PADefNet: node Euler angle = angle_scale · output (radians)
-  double translation_scale_m = 0.01;  // PADefNet: node translation = this · output (metres)
 };
 
 // The simulation loss L_sim (the paper's Eq. 8): a window of F consecutive predicted frames
@@ -99,6 +91,9 @@ struct TrainingConfig {
 };
 
 TrainingConfig load_training_config(const std::string& path);
+// The training config a model folder was trained with (its config.yaml, whose relative
+// paths resolve against the folder it came from).
+TrainingConfig model_training_config(const ModelFolder& model);
 // name: the file's path for messages; relative paths resolve against base_dir, or name's
 // folder when empty.
 TrainingConfig parse_training_config(const std::string& yaml_text, const std::string& name,

@@ -23,7 +23,7 @@
 #include "capture/evaluation/evaluation_report.h"
 #include "geometry/mesh_io.h"
 #include "capture/studio/synthetic_studio.h"
-#include "capture/training/capture_networks.h"
+#include "capture/model/capture_networks.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 

@@ -15,16 +15,17 @@
 #include <random>
 
 #include "capture/character/skeletool_io.h"
-#include "capture/inference/domain_adaptation.h"
+#include "capture/adaptation/domain_adaptation.h"
 #include "capture/inference/sequence_capture.h"
 #include "capture/inference/silhouette_translation.h"
 #include "geometry/mesh_io.h"
 #include "capture/motion/bvh.h"
 #include "capture/render/renderer.h"
 #include "capture/studio/synthetic_studio.h"
-#include "capture/training/capture_networks.h"
+#include "capture/model/capture_networks.h"
 #include "capture/training/loss_log.h"
-#include "capture/training/model_folder.h"
+#include "capture/model/model_folder.h"
+#include "capture/training/model_folder_writer.h"
 #include "nn/checkpoint.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
@@ -220,7 +221,7 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
   EXPECT_EQ(info.views, (std::vector<std::string>{"cam05"}));
   EXPECT_EQ(info.splits.at("train").size(), 6u);
   const ModelFolder adapted = read_model_folder(o.out);
-  EXPECT_EQ(adapted.config.stages[0].steps, 6);
+  EXPECT_EQ(model_training_config(adapted).stages[0].steps, 6);
   // PoseNet's stage lowers L_lm on the sequence's own detections.
   const std::vector<LossRow> rows = read_loss_log((fs::path(o.out) / "losses.csv").string());
   ASSERT_EQ(rows.size(), 12u);

@@ -6,7 +6,7 @@
 
 #include "capture/character/default_character.h"
 #include "capture/studio/cloth_perturbation.h"
-#include "capture/studio/garment_simulator.h"
+#include "capture/garment/garment_simulator.h"
 #include "tests/capture/test_files.h"
 
 namespace weft::capture::testing {

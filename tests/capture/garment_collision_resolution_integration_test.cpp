@@ -10,9 +10,9 @@
 
 #include "capture/character/default_character.h"
 #include "capture/studio/cloth_perturbation.h"
-#include "capture/studio/garment_collision_resolution.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_collision_resolution.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
 #include "tests/capture/coarse_skirt.h"
 #include "tests/capture/test_files.h"
 

@@ -8,7 +8,7 @@
 #include <cstdio>
 
 #include "capture/studio/studio_rig.h"
-#include "capture/training/global_pose.h"
+#include "capture/model/global_pose.h"
 #include "graph/gradcheck.h"
 
 namespace weft::capture {

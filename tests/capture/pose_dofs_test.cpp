@@ -1,4 +1,4 @@
-// PoseNet's outputs as dofs (capture/training/pose_dofs.h): limited dofs stay inside
+// PoseNet's outputs as dofs (capture/model/pose_dofs.h): limited dofs stay inside
 // their limits for any output, an output of 0 is the rest pose (also when the rest is not
 // the middle of the range), the slope at 0 is dof_scale as for unlimited dofs, the
 // inverse gives the outputs of a pose back, gradients flow (float64 central differences),
@@ -10,7 +10,7 @@
 
 #include "capture/character/body_skeleton_fit.h"
 #include "capture/character/skeletool_io.h"
-#include "capture/training/pose_dofs.h"
+#include "capture/model/pose_dofs.h"
 #include "graph/gradcheck.h"
 #include "tests/capture/stick_figure.h"
 #include "tests/capture/test_files.h"

@@ -10,8 +10,8 @@
 
 #include "capture/character/default_character.h"
 #include "capture/studio/cloth_perturbation.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
 #include "geometry/mesh_io.h"
 #include "capture/training/silhouette_rays.h"
 #include "capture/training/simulation_loss.h"

@@ -14,8 +14,8 @@
 
 #include "tests/capture/test_files.h"
 #include "capture/studio/cloth_perturbation.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
 #include "capture/io/portable_random.h"
 #include "capture/studio/synthetic_studio.h"
 #include "physics/simulation_window.h"

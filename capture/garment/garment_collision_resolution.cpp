@@ -1,8 +1,8 @@
-#include "capture/studio/garment_collision_resolution.h"
+#include "capture/garment/garment_collision_resolution.h"
 
 #include <chrono>
 
-#include "capture/studio/garment_simulator.h"
+#include "capture/garment/garment_simulator.h"
 #include "graph/error.h"
 
 namespace weft::capture {

@@ -1,4 +1,4 @@
-#include "capture/training/global_pose.h"
+#include "capture/model/global_pose.h"
 
 #include <Eigen/Dense>
 #include <algorithm>

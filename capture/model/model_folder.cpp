@@ -1,12 +1,10 @@
-#include "capture/training/model_folder.h"
+#include "capture/model/model_folder.h"
 
 
 #include <algorithm>
 #include <cstdio>
 #include <system_error>
 
-#include "capture/dataset/synthetic_dataset.h"
-#include "graph/atomic_file.h"
 #include "files/strict_yaml.h"
 #include "files/text_reader.h"
 #include "graph/error.h"
@@ -47,37 +45,6 @@ void load_capture_networks(const std::string& path, CaptureNetworks& nets) {
     nn::load_weights(path, nets);
 }
 
-void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir) {
-  const DatasetInfo info = read_dataset_info(data_dir);
-  const TrainingConfig cfg = load_training_config(config_path);
-  const fs::path dir(run);
-  // The character: a fresh copy next to the old one, then swapped in, so an interrupted
-  // copy never leaves a half-written character/.
-  const fs::path source = fs::path(info.character).parent_path();
-  const fs::path target = dir / "character", staging = dir / "character.partial";
-  fs::remove_all(staging);
-  fs::copy(source, staging, fs::copy_options::recursive);
-  fs::remove_all(target);
-  fs::rename(staging, target);
-
-  YAML::Emitter y;
-  y << YAML::BeginMap;
-  y << YAML::Key << "format" << YAML::Value << "weft-model/1";
-  y << YAML::Key << "config" << YAML::Value << "config.yaml";
-  y << YAML::Key << "config_dir" << YAML::Value << fs::absolute(config_path).parent_path().lexically_normal().string();
-  y << YAML::Key << "data" << YAML::Value << fs::absolute(data_dir).lexically_normal().string();
-  y << YAML::Key << "character" << YAML::Value
-    << ("character/" + fs::path(info.character).filename().string());
-  if (!cfg.physics.synth_config.empty())
-    y << YAML::Key << "synth_config" << YAML::Value
-      << fs::absolute(cfg.physics.synth_config).lexically_normal().string();
-  y << YAML::EndMap;
-  write_text_atomically((dir / "model.yaml").string(),
-                        "# What `weft infer`, `weft adapt` and `weft eval` need to use this model "
-                        "(capture/training/model_folder.h).\n" +
-                            std::string(y.c_str()) + "\n");
-}
-
 ModelFolder read_model_folder(const std::string& run) {
   const fs::path dir(run);
   WEFT_CHECK(fs::is_directory(dir), run, ": model folder not found (the --out folder of `weft train`)");
@@ -98,9 +65,17 @@ ModelFolder read_model_folder(const std::string& run) {
 
   ModelFolder m;
   m.dir = run;
-  const std::string config = y.path(root["config"], "config");
-  const std::string config_dir = y.get<std::string>(root["config_dir"], "config_dir", "a folder");
-  m.config = parse_training_config(read_file_bytes(config), config, config_dir);
+  m.config = y.path(root["config"], "config");
+  m.config_dir = y.get<std::string>(root["config_dir"], "config_dir", "a folder");
+  {
+    StrictYaml cy;
+    cy.file = m.config;
+    cy.dir = m.config_dir;
+    const YAML::Node config = cy.parse(read_file_bytes(m.config));
+    if (!config.IsMap()) cy.fail_at(config, "(document)", "expected a mapping of config keys");
+    if (config["seed"]) m.seed = cy.get<uint64_t>(config["seed"], "seed", "a non-negative integer");
+    if (config["network"]) parse_network_config(cy, config["network"], m.network);
+  }
   m.character = y.path(root["character"], "character");
   if (root["data"]) m.data = y.get<std::string>(root["data"], "data", "a folder");
   if (root["synth_config"]) m.synth_config = y.path(root["synth_config"], "synth_config");

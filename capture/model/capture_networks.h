@@ -21,14 +21,14 @@
 #include <vector>
 
 #include "capture/character/character.h"
+#include "capture/dataset/multiview_supervision.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/deformation/deformation_layer.h"
 #include "capture/deformation/losses.h"
 #include "capture/io/camera.h"
-#include "capture/training/global_pose.h"
-#include "capture/training/multiview_supervision.h"
-#include "capture/training/pose_dofs.h"
-#include "capture/training/training_config.h"
+#include "capture/model/global_pose.h"
+#include "capture/model/network_config.h"
+#include "capture/model/pose_dofs.h"
 #include "nn/resnet.h"
 
 namespace weft::capture {
@@ -77,6 +77,10 @@ struct CapturePrediction {
   // Embedded-graph rotations [B,K,3,3] and translations [B,K,3] (undefined without PADefNet).
   Tensor body_rotations, body_translations, cloth_rotations, cloth_translations;
 };
+
+// One sample of a batch of points [B,V,3] as plain Eigen (sample b), e.g. a prediction's
+// vertices for the simulator or the renderer.
+Vertices sample_vertices(const Tensor& vertices, int64_t b);
 
 class CaptureModel {
  public:

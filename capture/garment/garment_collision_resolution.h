@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "capture/character/character.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/garment/garment_config.h"
 #include "physics/collision_resolution.h"
 
 namespace weft::capture {

@@ -1,4 +1,4 @@
-#include "capture/training/multiview_supervision.h"
+#include "capture/dataset/multiview_supervision.h"
 
 #include <opencv2/imgproc.hpp>
 

@@ -1,4 +1,4 @@
-#include "capture/studio/garment_simulator.h"
+#include "capture/garment/garment_simulator.h"
 
 #include "graph/error.h"
 

@@ -1,4 +1,4 @@
-#include "capture/training/capture_networks.h"
+#include "capture/model/capture_networks.h"
 
 #include <algorithm>
 
@@ -9,6 +9,16 @@
 #include "ops/ops.h"
 
 namespace weft::capture {
+
+Vertices sample_vertices(const Tensor& vertices, int64_t b) {
+  WEFT_CHECK(vertices.dim() == 3 && vertices.size(2) == 3 && b >= 0 && b < vertices.size(0),
+             "sample_vertices: expected [B,V,3] and b < B, got ", shape_str(vertices.shape()), " and ", b);
+  const int64_t V = vertices.size(1);
+  Vertices out(V, 3);
+  const float* p = vertices.data<float>() + b * V * 3;
+  for (int64_t i = 0; i < V * 3; ++i) out.data()[i] = p[i];
+  return out;
+}
 
 PoseParametrisation pose_parametrisation(const Character& character) {
   const Skeleton& sk = character.skeleton;

@@ -1,10 +1,10 @@
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_windows.h"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 
-#include "capture/studio/garment_simulator.h"
+#include "capture/garment/garment_simulator.h"
 #include "geometry/mesh_io.h"
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
@@ -37,15 +37,13 @@ physics::SimulatorFactory GarmentSequence::simulator_factory() const {
 
 GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std::string& synth_config) {
   const DatasetInfo info = read_dataset_info(dataset_dir);
-  const SynthConfig cfg = load_synth_config(synth_config);
-  WEFT_CHECK(cfg.simulation.enabled, synth_config, ": simulation.enabled is false: the dataset's garment is skinned");
-  WEFT_CHECK(std::abs(cfg.fps() - info.fps) < 1e-9, synth_config, ": ", cfg.motion_key(0), ".fps ", cfg.fps(),
-             " but the dataset ", dataset_dir, " is at ", info.fps, " fps: not the config it was made with");
+  const SynthSimulationConfig simulation = load_simulation_config(synth_config);
+  WEFT_CHECK(simulation.enabled, synth_config, ": simulation.enabled is false: the dataset's garment is skinned");
   GarmentSequence s;
   s.dir = dataset_dir;
   s.character = load_character(info.character);
   WEFT_CHECK(s.character.has_cloth(), info.character, ": the character has no garment");
-  s.simulation = cfg.simulation;
+  s.simulation = simulation;
   s.fps = info.fps;
   s.frames = info.frames;
   s.failed_frames = info.failed_frames;

@@ -11,7 +11,7 @@
 // on it from the model's weights with OUT/adapt_config.yaml: PoseNet for `iterations`
 // steps on L_lm, then PADefNet for `iterations` steps with the weights of the model's last
 // stage, both at the learning rate the model's stage ended with. OUT is then a model
-// folder like any run (capture/training/model_folder.h): `weft infer --model OUT`.
+// folder like any run (capture/model/model_folder.h): `weft infer --model OUT`.
 #include <functional>
 #include <string>
 

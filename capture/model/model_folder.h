@@ -20,27 +20,28 @@
 #include <utility>
 #include <vector>
 
-#include "capture/training/capture_networks.h"
-#include "capture/training/training_config.h"
+#include "capture/model/capture_networks.h"
+#include "capture/model/network_config.h"
 
 namespace weft::capture {
 
 struct ModelFolder {
   std::string dir;
-  TrainingConfig config;
+  std::string config;        // the training config's copy (RUN/config.yaml)
+  std::string config_dir;    // where that config came from: its relative paths resolve there
+  uint64_t seed = 0;         // the config's seed and network section: what rebuilds the networks
+  NetworkConfig network;
   std::string character;     // path of character.yaml (in the folder)
   std::string data;          // the training dataset (may no longer exist)
   std::string synth_config;  // "" when the config names none
   std::string weights;       // model.safetensors or the last checkpoint
 };
 
-// Writes RUN/model.yaml and RUN/character/ for a run of `config_path` on `data_dir`
-// (atomically; an existing character/ is replaced by the dataset's).
-void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir);
-
 // Reads a model folder; errors name the folder and what is missing (no model.yaml: a run
 // of a weft before model folders, or not a run; no weights: training has not written a
-// checkpoint yet).
+// checkpoint yet). Of the training config only `seed` and `network` are read (the trainer
+// reads the whole of it: capture/training/training_config.h, model_training_config). It is
+// written by `weft train` (capture/training/model_folder_writer.h).
 ModelFolder read_model_folder(const std::string& run);
 
 // Loads both networks from model.safetensors or a training checkpoint (which also holds

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "capture/character/character.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/garment/garment_config.h"
 #include "physics/simulation_window.h"
 
 namespace weft::capture {
@@ -30,9 +30,10 @@ struct GarmentSequence {
   physics::SimulatorFactory simulator_factory() const;
 };
 
-// Reads the dataset and takes the simulation settings from `synth_config` (the config the
-// dataset was made with: the dataset does not record its simulation settings). Errors
-// (weft::Error) when the config's fps or the meshes' vertex counts do not match.
+// Reads the dataset and takes the simulation settings from the `simulation` section of
+// `synth_config` (the config the dataset was made with: the dataset does not record its
+// simulation settings); the time step is the dataset's. Errors (weft::Error) when the
+// simulation is off or the meshes' vertex counts do not match.
 GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std::string& synth_config);
 
 // A window from given states x_prev2 (frame start − 1) and x_prev (frame start),

@@ -1,4 +1,4 @@
-#include "capture/inference/domain_adaptation.h"
+#include "capture/adaptation/domain_adaptation.h"
 
 #include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
@@ -13,8 +13,7 @@
 #include "graph/atomic_file.h"
 #include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
-#include "capture/training/model_folder.h"
-#include "capture/studio/synthetic_studio.h"
+#include "capture/model/model_folder.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -94,11 +93,11 @@ std::string stage_line(const char* name, int steps, const StageConfig& s, const 
 
 // The trainer's config for the adaptation (see the header).
 std::string adaptation_config(const ModelFolder& model, int iterations) {
-  const TrainingConfig& c = model.config;
+  const TrainingConfig c = model_training_config(model);
   const bool physics = c.stages[2].steps > 0;
   std::string y = fmt::format(
       "# `weft adapt` of {}: both networks refined on the test sequence with one camera's\n"
-      "# losses (capture/inference/domain_adaptation.h); generated from the model's config.\n"
+      "# losses (capture/adaptation/domain_adaptation.h); generated from the model's config.\n"
       "seed: {}\n"
       "network: {{backbone: {}, input_size: {}, margin: {}, dof_scale: {}, angle_scale: {}, translation_scale_m: {}}}\n"
       "stages:\n",

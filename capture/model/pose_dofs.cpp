@@ -1,4 +1,4 @@
-#include "capture/training/pose_dofs.h"
+#include "capture/model/pose_dofs.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "capture/evaluation/split_evaluation.h"
+#include "capture/training/split_evaluation.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -13,12 +13,14 @@
 
 #include "capture/character/skeletool_io.h"
 #include "geometry/mesh_io.h"
-#include "capture/studio/garment_simulator.h"
-#include "capture/studio/garment_windows.h"
+#include "capture/garment/garment_simulator.h"
+#include "capture/garment/garment_windows.h"
 #include "capture/evaluation/frame_measures.h"
-#include "capture/training/capture_networks.h"
-#include "capture/training/model_folder.h"
+#include "capture/model/capture_networks.h"
+#include "capture/model/model_folder.h"
+#include "capture/render/silhouette_iou.h"
 #include "capture/training/multiview_losses.h"
+#include "capture/training/training_config.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
@@ -179,7 +181,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
 
   const bool measure_balance = ch.has_cloth() && !cfg.physics.synth_config.empty();
   const SynthSimulationConfig simulation =
-      measure_balance ? load_synth_config(cfg.physics.synth_config).simulation : SynthSimulationConfig{};
+      measure_balance ? load_simulation_config(cfg.physics.synth_config) : SynthSimulationConfig{};
 
   SplitEvaluation e;
   e.split = split;
@@ -264,11 +266,14 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
           chamfer.add(fe.chamfer_mm);
           template_cloth_err.add(mean_distance(cloth_t, gt_cloth[f]) * mpu * 1e3);
         }
+        const TriangleMesh* cloth_mesh = p.cloth.defined() ? &ch.cloth->mesh : nullptr;
         std::vector<double> ious(V), tmpl(V);
         tbb::parallel_for(0, V, [&](int w) {
           const Camera& cam = sup.silhouette_camera(f, w);
-          ious[w] = rendered_silhouette_iou(cam, ch, body, p.cloth.defined() ? &cloth : nullptr, sup.mask(f, w));
-          tmpl[w] = rendered_silhouette_iou(cam, ch, body_t, p.cloth.defined() ? &cloth_t : nullptr, sup.mask(f, w));
+          ious[w] = rendered_silhouette_iou(cam, ch.body.mesh, body, cloth_mesh, cloth_mesh ? &cloth : nullptr,
+                                            sup.mask(f, w));
+          tmpl[w] = rendered_silhouette_iou(cam, ch.body.mesh, body_t, cloth_mesh, cloth_mesh ? &cloth_t : nullptr,
+                                            sup.mask(f, w));
         });
         MeasuredMean frame_iou;
         for (int w = 0; w < V; ++w) iou.add(ious[w]), tmpl_iou.add(tmpl[w]), frame_iou.add(ious[w]);

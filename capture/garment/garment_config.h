@@ -1,0 +1,40 @@
+#pragma once
+// How the garment is simulated: the `simulation` section of a `weft synth` config
+// (docs/DATASET.md), which the synthetic studio makes the ground truth with and which the
+// simulation loss, the collision-resolution pass and the out-of-balance force reuse, so the
+// garment is simulated everywhere as the data was made.
+#include <string>
+
+#include "files/strict_yaml.h"
+#include "physics/cloth_model.h"
+
+namespace weft::capture {
+
+struct SynthSimulationConfig {
+  bool enabled = true;     // false: the garment is skinned, not simulated
+  int substeps = 1;        // implicit Euler steps per frame (> 1: the frame-level out-of-balance
+                           // force then includes the sub-stepping error)
+  int settle_frames = 15;  // frames simulated at the first pose before the motion starts
+  physics::ClothMaterial material{0.15, 2.0e5, 0.3, 2.0e-6, 0.001};
+  double collision_thickness = 0.004;  // m
+  double collision_stiffness = 1.0e4;  // N/m
+  double pin_stiffness = 1.0e4;        // N/m
+  double friction = 0.3;               // Coulomb coefficient of the garment on the body (skin)
+  // Newton iterations per step. A body stepping into the skirt cuts every step through
+  // the collision step filter (a global α), so such steps take 50–150 iterations to
+  // converge (measured on training.yaml, frames 33–49): with a cap of 50 the first of them
+  // stopped out of balance and every later frame failed after it.
+  int max_iterations = 200;
+  double tolerance = 1e-3;             // relative to each vertex's weight
+  double max_penetration = 0.01;       // m: a frame deeper than this counts as failed
+};
+
+// Reads the `simulation` section `n` into `s` (absent keys keep their value); errors name
+// the file, the line and the key (simulation.material.* by physics/cloth_material_yaml.h).
+void parse_simulation_config(const StrictYaml& yaml, const YAML::Node& n, SynthSimulationConfig& s);
+
+// The `simulation` section of the synth config at `synth_config` (defaults when it has
+// none); the config's other sections are not read.
+SynthSimulationConfig load_simulation_config(const std::string& synth_config);
+
+}  // namespace weft::capture

@@ -1,0 +1,24 @@
+#pragma once
+// The networks' shape and output scales: the `network` section of a training config
+// (docs/TRAINING.md), all a model folder's reader needs of that config to rebuild the
+// networks (model_folder.h).
+#include <string>
+
+#include "files/strict_yaml.h"
+
+namespace weft::capture {
+
+struct NetworkConfig {
+  std::string backbone = "resnet18";  // resnet18 | resnet34 | resnet50
+  int input_size = 128;               // crops are input_size² pixels
+  double margin = 0.15;               // crop margin around the person (dataset reader)
+  double dof_scale = 0.1;             // PoseNet: dof = rest + dof_scale · output (radians, units); limited dofs: pose_dofs.h
+  double angle_scale = 0.05;          // PADefNet: node Euler angle = angle_scale · output (radians)
+  double translation_scale_m = 0.01;  // PADefNet: node translation = this · output (metres)
+};
+
+// Reads the `network` section `n` into `c` (absent keys keep their value); errors name the
+// file, the line and the key (network.*).
+void parse_network_config(const StrictYaml& yaml, const YAML::Node& n, NetworkConfig& c);
+
+}  // namespace weft::capture
