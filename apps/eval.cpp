@@ -82,7 +82,8 @@ void add_eval_command(CLI::App& app) {
       ->default_val(1);
   cmd->add_option("--synth-config", o->synth_config,
                   "Synth config whose simulation section gives the cloth material for the out-of-balance force "
-                  "(default: capture.json's synth_config; without either the force is not measured)");
+                  "(default: the dataset's own, dataset.yaml's simulation section; without either the force is not "
+                  "measured)");
   cmd->callback([o, out] { run_eval(*o, *out); });
 }
 

@@ -2,7 +2,7 @@
 // dataset's garment, as `weft infer --resolve-collisions` runs it: per frame the
 // ground-truth cloth made into a prediction-like input by capture::perturb_start
 // (capture/studio/cloth_perturbation.h), then pushed out of the frame's body by
-// capture::GarmentCollisionResolver (the synth config's material and collision settings,
+// capture::GarmentCollisionResolver (the dataset's material and collision settings,
 // the body as the simulator sees it). One thread.
 //   Inputs (perturbation=...):
 //     patches: no stretch, a smooth displacement of at most 1 cm and 2 patches pushed 2 cm
@@ -12,13 +12,13 @@
 //   Per frame: RUNS passes (the same input), the median wall and CPU time; over frames the
 //   median, and the penetration before and after (deepest vertex, mean depth of the
 //   vertices inside), Newton iterations, the solved region and where the time goes.
-// Usage: bench_collision_resolution DATASET SYNTH_CONFIG [FRAMES=20] [RUNS=3] [SEED=1]
+// Usage: bench_collision_resolution DATASET [FRAMES=20] [RUNS=3] [SEED=1]
 //                                   [perturbation=patches|network] [radius=M] [k=1/s²] [compare=0|1]
 // compare=1 also solves the whole cloth per frame (untimed) and reports how far the
 // region's answer is from it (the region's truncation error), over the vertices moved by
 // the region or clear of the collision band at the start.
-// e.g. bench_collision_resolution /tmp/collide/train40 configs/synth/training.yaml 20 5
-// SYNTH_CONFIG must be the config the dataset was made with (garment_windows.h).
+// e.g. bench_collision_resolution /tmp/collide/train40 20 5
+// The simulation settings are the dataset's own (dataset.yaml's simulation section).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -93,15 +93,15 @@ int main(int argc_all, char** argv_all) {
     else
       positional.push_back(argv_all[k]);
   }
-  if (positional.size() < 3) {
-    std::fprintf(stderr, "usage: bench_collision_resolution DATASET SYNTH_CONFIG [FRAMES=20] [RUNS=3] [SEED=1] "
+  if (positional.size() < 2) {
+    std::fprintf(stderr, "usage: bench_collision_resolution DATASET [FRAMES=20] [RUNS=3] [SEED=1] "
                          "[perturbation=patches|network] [radius=M] [k=1/s^2]\n");
     return 2;
   }
-  const std::string dataset = positional[1], config = positional[2];
-  const int frames = positional.size() > 3 ? std::atoi(positional[3]) : 20;
-  const int runs = positional.size() > 4 ? std::atoi(positional[4]) : 3;
-  const uint64_t seed = positional.size() > 5 ? std::strtoull(positional[5], nullptr, 10) : 1;
+  const std::string dataset = positional[1];
+  const int frames = positional.size() > 2 ? std::atoi(positional[2]) : 20;
+  const int runs = positional.size() > 3 ? std::atoi(positional[3]) : 3;
+  const uint64_t seed = positional.size() > 4 ? std::strtoull(positional[4], nullptr, 10) : 1;
   auto key = [&](const char* k, const char* def) {
     auto it = named.find(k);
     std::string v = it == named.end() ? def : it->second;
@@ -118,7 +118,7 @@ int main(int argc_all, char** argv_all) {
   }
   set_num_threads(1);
 
-  const GarmentSequence s = load_garment_sequence(dataset, config);
+  const GarmentSequence s = load_garment_sequence(dataset);
   const double mpu = s.character.metres_per_unit;
   const physics::Positions rest = to_positions(s.character.cloth->mesh.V, mpu);
   GarmentCollisionResolver resolver(s.character, s.simulation), whole(s.character, s.simulation);

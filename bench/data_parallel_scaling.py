@@ -30,9 +30,6 @@ def bench_config(src: pathlib.Path, steps, out: pathlib.Path) -> dict:
     cfg = yaml.safe_load(src.read_text())
     for stage, n in zip(("pose", "warmup", "physics"), steps):
         cfg["stages"][stage]["steps"] = n
-    synth = cfg.get("physics", {}).get("synth_config")
-    if synth:
-        cfg["physics"]["synth_config"] = str((src.parent / synth).resolve())
     cfg.update(log_every=1000, validate_every=0, validation_samples=1, checkpoint_every=100000, keep_checkpoints=1)
     cfg.pop("shards", None)
     out.write_text(yaml.safe_dump(cfg))

@@ -30,7 +30,6 @@ for spec in "resnet18 128" "resnet50 256"; do
   model="$work/model_${arch}_$size"
   if [ ! -f "$model/model.yaml" ]; then
     sed -e "s/^network: .*/network: {backbone: $arch, input_size: $size}/" \
-        -e "s|synth_config: ../synth/tiny.yaml|synth_config: $root/configs/synth/tiny.yaml|" \
         "$root/configs/train/tiny.yaml" > "$work/train_${arch}_$size.yaml"
     "$weft" train --config "$work/train_${arch}_$size.yaml" --data "$work/tiny" --out "$model" --stop-after 1 >/dev/null
   fi

@@ -54,7 +54,7 @@ oracle_pose: true
 network: {backbone: resnet18, input_size: 64}
 stages:
 $3
-physics: {synth_config: $root/configs/synth/physics_claim.yaml, window_frames: 4, max_iterations: 60, tolerance: 1.0e-2}
+physics: {window_frames: 4, max_iterations: 60, tolerance: 1.0e-2}
 silhouette_size: 64
 loader_threads: 1
 log_every: 20

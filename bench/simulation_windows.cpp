@@ -12,12 +12,12 @@
 //   Batch: BATCH_WINDOWS windows (default 8; 16 simulated frames) through
 //   physics::simulate_windows on THREADS threads (default 2), BATCHES times (default 5):
 //   median batch wall time (target <= 1.5 s) and CPU time.
-// Usage: bench_simulation_windows DATASET SYNTH_CONFIG [N] [SEED]
+// Usage: bench_simulation_windows DATASET [N] [SEED]
 //                                 [frames=2] [batches=5] [batch_windows=8] [threads=2]
 //                                 [mode=all|robustness|batch]
-// e.g. bench_simulation_windows /tmp/runs/training configs/synth/training.yaml 500 1
-// SYNTH_CONFIG must be the config the dataset was made with (its simulation section and
-// fps; the dataset does not record them). Prints one line per window and a SUMMARY line.
+// e.g. bench_simulation_windows /tmp/runs/training 500 1
+// The simulation settings are the dataset's own (dataset.yaml's simulation section). Prints
+// one line per window and a SUMMARY line.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -110,14 +110,14 @@ int main(int argc_all, char** argv_all) {
     else
       positional.push_back(argv_all[k]);
   }
-  if (positional.size() < 3) {
-    std::fprintf(stderr, "usage: bench_simulation_windows DATASET SYNTH_CONFIG [N] [SEED] [frames=2] [batches=5] "
+  if (positional.size() < 2) {
+    std::fprintf(stderr, "usage: bench_simulation_windows DATASET [N] [SEED] [frames=2] [batches=5] "
                          "[batch_windows=8] [threads=2] [mode=all|robustness|batch]\n");
     return 2;
   }
-  const std::string dataset = positional[1], config = positional[2];
-  const int n = positional.size() > 3 ? std::atoi(positional[3]) : 500;
-  const uint64_t seed = positional.size() > 4 ? std::strtoull(positional[4], nullptr, 10) : 1;
+  const std::string dataset = positional[1];
+  const int n = positional.size() > 2 ? std::atoi(positional[2]) : 500;
+  const uint64_t seed = positional.size() > 3 ? std::strtoull(positional[3], nullptr, 10) : 1;
   auto key = [&](const char* k, const char* def) {
     auto it = named.find(k);
     std::string v = it == named.end() ? def : it->second;
@@ -134,7 +134,7 @@ int main(int argc_all, char** argv_all) {
     return 2;
   }
 
-  const GarmentSequence s = load_garment_sequence(dataset, config);
+  const GarmentSequence s = load_garment_sequence(dataset);
   const physics::SimulatorFactory factory = s.simulator_factory();
   const physics::Positions rest = to_positions(s.character.cloth->mesh.V, s.character.metres_per_unit);
   const double tolerance_mm = 1.0;

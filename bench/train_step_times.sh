@@ -3,7 +3,7 @@
 #   bench/train_step_times.sh ARCH INPUT_SIZE DATASET [STEPS]
 # e.g. bench/train_step_times.sh resnet18 128 data/tiny 20. Runs `weft train` with a config
 # written here (batch 8 in stage b; 9 = 3 windows of 3 frames in stage c, the simulator of
-# configs/synth/tiny.yaml), no PoseNet stage (its weights do not change the cost), and prints
+# the dataset's dataset.yaml), no PoseNet stage (its weights do not change the cost), and prints
 # the mean milliseconds per step of each part over the stage's steps after the first two
 # (RUN/timing_<stage>.json covers all of them; docs/TRAINING.md). WEFT_BUILD_DIR picks the build.
 set -euo pipefail
@@ -17,7 +17,7 @@ network: {backbone: $arch, input_size: $size}
 stages:
   warmup:  {steps: $steps, batch_size: 8, lr: 1.0e-4, landmarks: 1, silhouette: 1, arap: 10, attachment: 10}
   physics: {steps: $steps, batch_size: 9, lr: 1.0e-4, landmarks: 1, silhouette: 1, simulation: 1, attachment: 10}
-physics: {synth_config: $root/configs/synth/tiny.yaml, window_frames: 3, max_iterations: 60, tolerance: 1.0e-2}
+physics: {window_frames: 3, max_iterations: 60, tolerance: 1.0e-2}
 silhouette_size: 128
 loader_threads: 1
 log_every: 1000

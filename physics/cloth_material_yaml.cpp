@@ -1,5 +1,6 @@
 #include "physics/cloth_material_yaml.h"
 
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -49,6 +50,20 @@ void read_cloth_material(const StrictYaml& y, const YAML::Node& n, const std::st
     m.compression_ratio = number_in(y, n["compression_ratio"], full("compression_ratio"), 0, 1, false, "");
   if (n["min_area_ratio"])
     m.min_area_ratio = number_in(y, n["min_area_ratio"], full("min_area_ratio"), 0, 1, true, "");
+}
+
+std::string yaml_number(double value) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, value);
+  return std::string(buf, r.ptr);
+}
+
+std::string cloth_material_yaml(const ClothMaterial& m) {
+  return "{density: " + yaml_number(m.density) + ", youngs_modulus: " + yaml_number(m.youngs_modulus) +
+         ", poisson_ratio: " + yaml_number(m.poisson_ratio) + ", bending_stiffness: " +
+         yaml_number(m.bending_stiffness) + ", thickness: " + yaml_number(m.thickness) +
+         ", membrane: " + to_string(m.membrane) + ", compression_ratio: " + yaml_number(m.compression_ratio) +
+         ", min_area_ratio: " + yaml_number(m.min_area_ratio) + "}";
 }
 
 }  // namespace weft::physics

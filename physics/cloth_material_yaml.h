@@ -25,4 +25,13 @@ namespace weft::physics {
 void read_cloth_material(const StrictYaml& yaml, const YAML::Node& node, const std::string& key,
                          ClothMaterial& material);
 
+// Every key of `material` as a YAML flow mapping ("{density: 0.15, youngs_modulus: 200000,
+// ...}"), numbers in their shortest form that reads back to the same double, so
+// read_cloth_material gives `material` back exactly.
+std::string cloth_material_yaml(const ClothMaterial& material);
+
+// The shortest text that reads back to the same double (std::to_chars), for YAML written
+// to be read again.
+std::string yaml_number(double value);
+
 }  // namespace weft::physics

@@ -33,6 +33,8 @@ struct ClothMaterial {
   // tension_field: an element compressed below this area ratio (current / rest area)
   // meets a barrier against collapse; in [0, 1), 0 for none.
   double min_area_ratio = 0.5;
+
+  bool operator==(const ClothMaterial&) const = default;
 };
 
 // Throws weft::Error naming the field if a value is non-physical.

@@ -73,9 +73,11 @@ int write_sequence_dataset(const AdaptOptions& o, const ModelFolder& model, cons
   y << YAML::Key << "splits" << YAML::Value << YAML::BeginMap << YAML::Key << "train" << YAML::Value << YAML::Flow
     << all << YAML::EndMap;
   y << YAML::EndMap;
+  // The model's garment simulation goes with it: adaptation's physics stage reads it here.
   write_text_atomically((staging / "dataset.yaml").string(),
                         "# The test sequence of `weft adapt` as a one-view dataset (docs/DATASET.md).\n" +
-                            std::string(y.c_str()) + "\n");
+                            std::string(y.c_str()) + "\n" +
+                            (model.simulation ? simulation_config_yaml(*model.simulation) : std::string()));
   fs::remove_all(dir);
   fs::rename(staging, dir);
   spdlog::info("sequence: {} frames of {} ({} with detections) written to {}", n, view, detected, dir.string());
@@ -108,9 +110,8 @@ std::string adaptation_config(const ModelFolder& model, int iterations) {
   y += stage_line("pose", iterations, c.stages[0], pose_weights);
   y += stage_line("warmup", physics ? 0 : iterations, c.stages[1], c.stages[1].weights);
   y += stage_line("physics", physics ? iterations : 0, c.stages[2], c.stages[2].weights);
-  if (!c.physics.synth_config.empty())
-    y += fmt::format("physics: {{synth_config: {}, window_frames: {}, max_iterations: {}, tolerance: {}}}\n",
-                     fs::absolute(c.physics.synth_config).lexically_normal().string(), c.physics.window_frames,
+  if (physics)
+    y += fmt::format("physics: {{window_frames: {}, max_iterations: {}, tolerance: {}}}\n", c.physics.window_frames,
                      c.physics.max_iterations, c.physics.tolerance);
   y += fmt::format(
       "silhouette_size: {}\nloader_threads: {}\nlog_every: {}\nvalidate_every: 0\nvalidation_samples: 1\n"

@@ -247,9 +247,10 @@ DatasetInfo read_dataset_info(const std::string& dir) {
   const std::string file = (fs::path(dir) / "dataset.yaml").string();
   const StrictYaml y{file, fs::path(dir)};
   const YAML::Node root = y.parse(read_file_bytes(file));
+  // `simulation` (the garment's simulation settings) is read by capture/garment/garment_config.h.
   y.check_keys(root, "", {"format", "name", "seed", "fps", "metres_per_unit", "frames", "views",
                           "image_width", "image_height", "camera_per_frame", "character",
-                          "dt_scale", "splits", "failed_frames", "segments"});
+                          "dt_scale", "splits", "failed_frames", "segments", "simulation"});
   DatasetInfo info;
   info.dir = dir;
 

@@ -130,17 +130,20 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   SynthSimulationConfig simulation;
   bool with_oob = false;
   if (e.has_cloth) {
-    const std::string path = o.synth_config.empty() ? cap.synth_config : o.synth_config;
-    if (path.empty()) {
-      e.notes.push_back("out-of-balance force not measured: no synth config gives the cloth material (capture.json's "
-                        "synth_config is empty; pass --synth-config)");
-      spdlog::warn("{}", e.notes.back());
-    } else {
-      WEFT_CHECK(fs::exists(path), path, ": no such synth config (from ",
-                 o.synth_config.empty() ? cap_json + "'s synth_config" : std::string("--synth-config"), ")");
-      simulation = load_simulation_config(path);
-      e.synth_config = path;
+    if (!o.synth_config.empty()) {
+      WEFT_CHECK(fs::exists(o.synth_config), o.synth_config, ": no such synth config (from --synth-config)");
+      simulation = load_simulation_config(o.synth_config);
+      e.synth_config = o.synth_config;
       with_oob = true;
+    } else if (const std::optional<SynthSimulationConfig> s = find_dataset_simulation(o.data)) {
+      simulation = *s;
+      e.synth_config = (fs::path(o.data) / "dataset.yaml").string();
+      with_oob = true;
+    } else {
+      e.notes.push_back("out-of-balance force not measured: no simulation settings give the cloth material (the "
+                        "dataset's dataset.yaml has no simulation section: regenerate it with weft synth, or pass "
+                        "--synth-config)");
+      spdlog::warn("{}", e.notes.back());
     }
   } else {
     e.notes.push_back("the character has no garment: cloth error, penetration and out-of-balance force not measured");

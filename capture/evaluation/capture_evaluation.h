@@ -39,7 +39,7 @@ struct EvaluationOptions {
   std::string view;          // the input view; "" → capture.json's "view"
   bool gt_translation = false;
   int iou_every = 1;         // IoU on every N-th captured frame (in frame-id order), N ≥ 1
-  std::string synth_config;  // overrides capture.json's synth_config ("" keeps it)
+  std::string synth_config;  // a synth config whose simulation section overrides the dataset's ("" keeps it)
 };
 
 
@@ -91,7 +91,8 @@ struct CaptureEvaluation {
   std::string view;                // the input view used
   std::vector<std::string> views;  // the dataset's views (the order of FrameEvaluation::iou)
   std::string character;           // character.yaml
-  std::string synth_config;        // the one used for the out-of-balance force ("" none)
+  std::string synth_config;        // the file whose simulation section gave the out-of-balance force's
+                                   // material: DATA/dataset.yaml or --synth-config ("" none)
   double metres_per_unit = 1, fps = 30;
   bool has_cloth = false;
   std::vector<std::string> notes;  // what could not be measured and why

@@ -70,7 +70,6 @@ CaptureFolder read_capture_folder(const std::string& dir) {
   c.character = resolve(dir, required_string(j, "character", where));
   c.metres_per_unit = required_number(j, "metres_per_unit", where);
   WEFT_CHECK(c.metres_per_unit > 0, where, ": metres_per_unit must be > 0, is ", c.metres_per_unit);
-  c.synth_config = resolve(dir, required_string(j, "synth_config", where));
   c.input = required_string(j, "input", where);
   c.camera = required_string(j, "camera", where);
   c.view = required_string(j, "view", where);

@@ -2,7 +2,7 @@
 // The capture folder `weft infer` writes (docs/EVALUATION.md), read for evaluation:
 //
 //   DIR/capture.json   format "weft-capture/1"; model, character (character.yaml), metres_per_unit,
-//                      synth_config ("" when unknown), input, camera, view, fps,
+//                      input, camera, view, fps,
 //                      collisions_resolved, frames [{id, source, pivot [x,y,z], translation_from}],
 //                      timing (not read)
 //   DIR/meshes/body_<id:04d>.ply, DIR/meshes/cloth_<id:04d>.ply   world coordinates, character
@@ -36,7 +36,6 @@ struct CaptureFolder {
   std::string model;            // the model folder
   std::string character;        // character.yaml (resolved against dir when relative)
   double metres_per_unit = 1.0;
-  std::string synth_config;     // "" when unknown (resolved against dir when relative)
   std::string input, camera, view;
   double fps = 30;
   bool collisions_resolved = false;

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "files/text_reader.h"
+#include "graph/error.h"
 #include "physics/cloth_material_yaml.h"
 
 namespace weft::capture {
@@ -43,6 +44,42 @@ SynthSimulationConfig load_simulation_config(const std::string& synth_config) {
   SynthSimulationConfig s;
   if (root["simulation"]) parse_simulation_config(y, root["simulation"], s);
   return s;
+}
+
+std::string simulation_config_yaml(const SynthSimulationConfig& s) {
+  using physics::yaml_number;
+  return std::string("simulation:\n") + "  enabled: " + (s.enabled ? "true" : "false") + "\n" +
+         "  substeps: " + std::to_string(s.substeps) + "\n" +
+         "  settle_frames: " + std::to_string(s.settle_frames) + "\n" +
+         "  material: " + physics::cloth_material_yaml(s.material) + "\n" +
+         "  collision: {thickness: " + yaml_number(s.collision_thickness) +
+         ", stiffness: " + yaml_number(s.collision_stiffness) + "}\n" +
+         "  pins: {stiffness: " + yaml_number(s.pin_stiffness) + "}\n" +
+         "  friction: " + yaml_number(s.friction) + "\n" +
+         "  solver: {max_iterations: " + std::to_string(s.max_iterations) + ", tolerance: " + yaml_number(s.tolerance) +
+         "}\n" +
+         "  max_penetration: " + yaml_number(s.max_penetration) + "\n";
+}
+
+std::optional<SynthSimulationConfig> find_dataset_simulation(const std::string& dataset_dir) {
+  const std::string file = (std::filesystem::path(dataset_dir) / "dataset.yaml").string();
+  StrictYaml y;
+  y.file = file;
+  y.dir = dataset_dir;
+  const YAML::Node root = y.parse(read_file_bytes(file));
+  if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping");
+  if (!root["simulation"]) return std::nullopt;
+  SynthSimulationConfig s;
+  parse_simulation_config(y, root["simulation"], s);
+  return s;
+}
+
+SynthSimulationConfig read_dataset_simulation(const std::string& dataset_dir) {
+  std::optional<SynthSimulationConfig> s = find_dataset_simulation(dataset_dir);
+  WEFT_CHECK(s.has_value(), (std::filesystem::path(dataset_dir) / "dataset.yaml").string(),
+             ": missing key 'simulation' (the garment's simulation settings, which `weft synth` writes since "
+             "datasets carry them): regenerate the dataset with `weft synth --config RECIPE --out ", dataset_dir, "`");
+  return *s;
 }
 
 }  // namespace weft::capture

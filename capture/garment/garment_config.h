@@ -1,8 +1,11 @@
 #pragma once
 // How the garment is simulated: the `simulation` section of a `weft synth` config
-// (docs/DATASET.md), which the synthetic studio makes the ground truth with and which the
-// simulation loss, the collision-resolution pass and the out-of-balance force reuse, so the
-// garment is simulated everywhere as the data was made.
+// (docs/DATASET.md), which the synthetic studio makes the ground truth with. `weft synth`
+// writes it into the dataset's dataset.yaml and `weft train` copies it into the model
+// folder's model.yaml, where the simulation loss, the collision-resolution pass and the
+// out-of-balance force read it, so the garment is simulated everywhere as the data was made
+// and no recipe has to stay where it was.
+#include <optional>
 #include <string>
 
 #include "files/strict_yaml.h"
@@ -27,6 +30,8 @@ struct SynthSimulationConfig {
   int max_iterations = 200;
   double tolerance = 1e-3;             // relative to each vertex's weight
   double max_penetration = 0.01;       // m: a frame deeper than this counts as failed
+
+  bool operator==(const SynthSimulationConfig&) const = default;
 };
 
 // Reads the `simulation` section `n` into `s` (absent keys keep their value); errors name
@@ -34,7 +39,19 @@ struct SynthSimulationConfig {
 void parse_simulation_config(const StrictYaml& yaml, const YAML::Node& n, SynthSimulationConfig& s);
 
 // The `simulation` section of the synth config at `synth_config` (defaults when it has
-// none); the config's other sections are not read.
+// none); the config's other sections are not read. `weft eval --synth-config` and model
+// folders written before datasets carried their simulation read it.
 SynthSimulationConfig load_simulation_config(const std::string& synth_config);
+
+// The section as `weft synth` writes it into dataset.yaml and `weft train` into model.yaml:
+// "simulation:" and every key, indented by two spaces, numbers in their shortest exact form,
+// so parse_simulation_config reads back the same settings.
+std::string simulation_config_yaml(const SynthSimulationConfig& simulation);
+
+// The garment's simulation settings a dataset was made with: the `simulation` section of
+// DIR/dataset.yaml. find_: nothing when the dataset has none; read_: an error naming
+// dataset.yaml and the missing key, and how to regenerate the dataset.
+std::optional<SynthSimulationConfig> find_dataset_simulation(const std::string& dataset_dir);
+SynthSimulationConfig read_dataset_simulation(const std::string& dataset_dir);
 
 }  // namespace weft::capture

@@ -35,10 +35,10 @@ physics::SimulatorFactory GarmentSequence::simulator_factory() const {
   return garment_simulator_factory(character, simulation, fps);
 }
 
-GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std::string& synth_config) {
+GarmentSequence load_garment_sequence(const std::string& dataset_dir) {
   const DatasetInfo info = read_dataset_info(dataset_dir);
-  const SynthSimulationConfig simulation = load_simulation_config(synth_config);
-  WEFT_CHECK(simulation.enabled, synth_config, ": simulation.enabled is false: the dataset's garment is skinned");
+  const SynthSimulationConfig simulation = read_dataset_simulation(dataset_dir);
+  WEFT_CHECK(simulation.enabled, dataset_dir, "/dataset.yaml: simulation.enabled is false: the dataset's garment is skinned");
   GarmentSequence s;
   s.dir = dataset_dir;
   s.character = load_character(info.character);

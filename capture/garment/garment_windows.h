@@ -1,7 +1,7 @@
 #pragma once
 // Simulation windows over a `weft synth` dataset's ground truth (docs/DATASET.md), built
-// to simulate the garment exactly as the synth did: the dataset's character, the synth
-// config's simulation section and fps (garment_simulator.h), the body of gt/body_*.ply as
+// to simulate the garment exactly as the synth did: the dataset's character, simulation
+// settings and fps (garment_simulator.h), the body of gt/body_*.ply as
 // the moving obstacle and the waistband pins following the character skinned by
 // gt/pose.motion. A window starting at frame t takes two given states for frames t − 1
 // and t and simulates frames t + 1 … t + F − 1 (F = frames + 1 states in all).
@@ -17,8 +17,8 @@ namespace weft::capture {
 struct GarmentSequence {
   std::string dir;                         // the dataset folder
   Character character;                     // DIR/character/character.yaml
-  SynthSimulationConfig simulation;        // from the synth config
-  double fps = 30;                         // the dataset's (checked against the config's)
+  SynthSimulationConfig simulation;        // dataset.yaml's simulation section
+  double fps = 30;                         // the dataset's
   int frames = 0;
   std::vector<int> failed_frames;          // from dataset.yaml
   std::vector<int> segments;               // first frame of each clip (dataset.yaml; empty: one clip)
@@ -30,11 +30,11 @@ struct GarmentSequence {
   physics::SimulatorFactory simulator_factory() const;
 };
 
-// Reads the dataset and takes the simulation settings from the `simulation` section of
-// `synth_config` (the config the dataset was made with: the dataset does not record its
-// simulation settings); the time step is the dataset's. Errors (weft::Error) when the
-// simulation is off or the meshes' vertex counts do not match.
-GarmentSequence load_garment_sequence(const std::string& dataset_dir, const std::string& synth_config);
+// Reads the dataset with the simulation settings it was made with (dataset.yaml's
+// `simulation` section, garment_config.h); the time step is the dataset's. Errors
+// (weft::Error) when the dataset has no such section, the simulation is off or the
+// meshes' vertex counts do not match.
+GarmentSequence load_garment_sequence(const std::string& dataset_dir);
 
 // A window from given states x_prev2 (frame start − 1) and x_prev (frame start),
 // simulating `frames` frames after `start` with the ground-truth body and pins. Frames

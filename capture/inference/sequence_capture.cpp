@@ -213,10 +213,10 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   std::unique_ptr<GarmentCollisionResolver> resolver;
   if (o.resolve_collisions) {
     WEFT_CHECK(character.has_cloth(), model.character, ": --resolve-collisions needs a garment");
-    WEFT_CHECK(!model.synth_config.empty(), o.model,
-               "/model.yaml: no synth_config, so no garment material for --resolve-collisions (train with "
-               "physics.synth_config set)");
-    resolver = std::make_unique<GarmentCollisionResolver>(character, load_simulation_config(model.synth_config));
+    WEFT_CHECK(model.simulation.has_value(), o.model,
+               "/model.yaml: missing key 'simulation', so no garment material for --resolve-collisions (the model "
+               "was trained on a dataset without one: regenerate it with weft synth and train again)");
+    resolver = std::make_unique<GarmentCollisionResolver>(character, *model.simulation);
   }
 
   // Pass 2: the deformation layer, placement and files.
@@ -367,7 +367,6 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   j["weights"] = fs::absolute(model.weights).lexically_normal().string();
   j["character"] = fs::absolute(model.character).lexically_normal().string();
   j["metres_per_unit"] = character.metres_per_unit;
-  j["synth_config"] = model.synth_config;
   j["input"] = fs::absolute(o.input).lexically_normal().string();
   j["camera"] = fs::absolute(o.camera).lexically_normal().string();
   j["view"] = input.cameras().name();

@@ -38,7 +38,7 @@ struct CaptureOptions {
   int max_frames = -1;      // stop after this many frames (−1: all)
   // The paper's optional final collision resolution: cloth vertices pushed out of the body
   // (capture/garment/garment_collision_resolution.h) with the garment material of the
-  // model's synth config; needs a model trained with one (physics.synth_config).
+  // model folder (model.yaml's simulation section, from its training dataset).
   bool resolve_collisions = false;
 };
 

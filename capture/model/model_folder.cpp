@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <system_error>
 
+#include "capture/dataset/synthetic_dataset.h"
 #include "files/strict_yaml.h"
+#include "graph/atomic_file.h"
 #include "files/text_reader.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
@@ -45,6 +47,35 @@ void load_capture_networks(const std::string& path, CaptureNetworks& nets) {
     nn::load_weights(path, nets);
 }
 
+void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir) {
+  const DatasetInfo info = read_dataset_info(data_dir);
+  const std::optional<SynthSimulationConfig> simulation = find_dataset_simulation(data_dir);
+  const fs::path dir(run);
+  // The character: a fresh copy next to the old one, then swapped in, so an interrupted
+  // copy never leaves a half-written character/.
+  const fs::path source = fs::path(info.character).parent_path();
+  const fs::path target = dir / "character", staging = dir / "character.partial";
+  fs::remove_all(staging);
+  fs::copy(source, staging, fs::copy_options::recursive);
+  fs::remove_all(target);
+  fs::rename(staging, target);
+
+  YAML::Emitter y;
+  y << YAML::BeginMap;
+  y << YAML::Key << "format" << YAML::Value << "weft-model/1";
+  y << YAML::Key << "config" << YAML::Value << "config.yaml";
+  y << YAML::Key << "config_dir" << YAML::Value << fs::absolute(config_path).parent_path().lexically_normal().string();
+  y << YAML::Key << "data" << YAML::Value << fs::absolute(data_dir).lexically_normal().string();
+  y << YAML::Key << "character" << YAML::Value
+    << ("character/" + fs::path(info.character).filename().string());
+  y << YAML::EndMap;
+  write_text_atomically((dir / "model.yaml").string(),
+                        "# What `weft infer`, `weft adapt` and `weft eval` need to use this model "
+                        "(capture/model/model_folder.h).\n" +
+                            std::string(y.c_str()) + "\n" +
+                            (simulation ? simulation_config_yaml(*simulation) : std::string()));
+}
+
 ModelFolder read_model_folder(const std::string& run) {
   const fs::path dir(run);
   WEFT_CHECK(fs::is_directory(dir), run, ": model folder not found (the --out folder of `weft train`)");
@@ -57,7 +88,9 @@ ModelFolder read_model_folder(const std::string& run) {
   y.dir = dir;
   const YAML::Node root = y.parse(read_file_bytes(file.string()));
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping");
-  y.check_keys(root, "", {"format", "config", "config_dir", "data", "character", "synth_config"});
+  // synth_config: model folders written before datasets carried their simulation settings
+  // named the recipe instead; read for them only.
+  y.check_keys(root, "", {"format", "config", "config_dir", "data", "character", "simulation", "synth_config"});
   for (const char* key : {"format", "config", "config_dir", "character"})
     if (!root[key]) y.fail_at(root, key, "missing");
   const std::string format = y.get<std::string>(root["format"], "format", "a string");
@@ -78,7 +111,12 @@ ModelFolder read_model_folder(const std::string& run) {
   }
   m.character = y.path(root["character"], "character");
   if (root["data"]) m.data = y.get<std::string>(root["data"], "data", "a folder");
-  if (root["synth_config"]) m.synth_config = y.path(root["synth_config"], "synth_config");
+  if (root["simulation"]) {
+    m.simulation.emplace();
+    parse_simulation_config(y, root["simulation"], *m.simulation);
+  } else if (root["synth_config"]) {
+    m.simulation = load_simulation_config(y.path(root["synth_config"], "synth_config"));
+  }
 
   if (fs::exists(dir / "model.safetensors")) {
     m.weights = (dir / "model.safetensors").string();

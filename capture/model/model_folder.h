@@ -10,16 +10,19 @@
 //   config_dir: /abs/configs/train # where it came from: its relative paths resolve there
 //   data: /abs/data/training_set   # the dataset it trained on
 //   character: character/character.yaml
-//   synth_config: /abs/...yaml     # physics.synth_config resolved (absent: none); the
-//                                  # cloth material of the simulation loss, the collision
-//                                  # pass and the out-of-balance force
+//   simulation: {...}              # the dataset's simulation section (garment_config.h;
+//                                  # absent when the dataset has none): the cloth material
+//                                  # and settings of the collision pass, adaptation's
+//                                  # simulation loss and the out-of-balance force
 // The weights are model.safetensors once training finished, else the last checkpoint.
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "capture/garment/garment_config.h"
 #include "capture/model/capture_networks.h"
 #include "capture/model/network_config.h"
 
@@ -33,16 +36,20 @@ struct ModelFolder {
   NetworkConfig network;
   std::string character;     // path of character.yaml (in the folder)
   std::string data;          // the training dataset (may no longer exist)
-  std::string synth_config;  // "" when the config names none
+  std::optional<SynthSimulationConfig> simulation;  // the garment's, from the training dataset
   std::string weights;       // model.safetensors or the last checkpoint
 };
 
 // Reads a model folder; errors name the folder and what is missing (no model.yaml: a run
 // of a weft before model folders, or not a run; no weights: training has not written a
 // checkpoint yet). Of the training config only `seed` and `network` are read (the trainer
-// reads the whole of it: capture/training/training_config.h, model_training_config). It is
-// written by `weft train` (capture/training/model_folder_writer.h).
+// reads the whole of it: capture/training/training_config.h, model_training_config).
 ModelFolder read_model_folder(const std::string& run);
+
+// Writes RUN/model.yaml and RUN/character/ for a run of `config_path` on `data_dir`
+// (atomically; an existing character/ is replaced by the dataset's), with the dataset's
+// simulation section when it has one.
+void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir);
 
 // Loads both networks from model.safetensors or a training checkpoint (which also holds
 // the optimiser's state: left out).

@@ -761,7 +761,8 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
       << "  train: " << yaml_int_list(summary.train) << "\n"
       << "  val: " << yaml_int_list(summary.val) << "\n"
       << "  test: " << yaml_int_list(summary.test) << "\n"
-      << "failed_frames: " << yaml_int_list(failed) << "\n";
+      << "failed_frames: " << yaml_int_list(failed) << "\n"
+      << simulation_config_yaml(cfg.simulation);
     write_text_atomically((out / "dataset.yaml").string(), y.str());
   }
 

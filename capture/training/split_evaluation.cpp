@@ -179,9 +179,11 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
     mean_kp.add(mean_stats.mean_error_px, mean_stats.detections);
   }
 
-  const bool measure_balance = ch.has_cloth() && !cfg.physics.synth_config.empty();
-  const SynthSimulationConfig simulation =
-      measure_balance ? load_simulation_config(cfg.physics.synth_config) : SynthSimulationConfig{};
+  // The garment's simulation as the dataset was made (dataset.yaml; none: not measured).
+  const std::optional<SynthSimulationConfig> dataset_simulation =
+      ch.has_cloth() ? find_dataset_simulation(data) : std::nullopt;
+  const bool measure_balance = dataset_simulation.has_value();
+  const SynthSimulationConfig simulation = dataset_simulation.value_or(SynthSimulationConfig{});
 
   SplitEvaluation e;
   e.split = split;

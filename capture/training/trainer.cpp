@@ -22,7 +22,6 @@
 #include "capture/model/capture_networks.h"
 #include "capture/training/loss_log.h"
 #include "capture/model/model_folder.h"
-#include "capture/training/model_folder_writer.h"
 #include "capture/render/silhouette_iou.h"
 #include "capture/training/multiview_losses.h"
 #include "capture/training/silhouette_rays.h"
@@ -102,6 +101,9 @@ class Trainer {
         shards_(cfg_.shards > 0 ? cfg_.shards : group_.size()) {
     WEFT_CHECK(shards_ % group_.size() == 0, cfg_.file, ": shards: ", shards_, " cannot be spread evenly over the ",
                group_.size(), " ranks of this job (mpirun -np); use a multiple of the ranks, or 0 for one per rank");
+    // The physics stage simulates the garment as the dataset was made: a dataset without
+    // those settings is an error now, not when the stage starts.
+    if (cfg_.stages[2].steps > 0) read_dataset_simulation(options.data);
     DatasetOptions d;
     d.input_size = cfg_.network.input_size;
     d.margin = cfg_.network.margin;
@@ -692,7 +694,7 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
                    stage_start + s.steps, s.batch_size, s.lr);
       if (s.kind == StageKind::physics) {
         WEFT_CHECK(character_.has_cloth(), info_.character, ": the physics stage needs a garment");
-        SynthSimulationConfig sim = load_simulation_config(cfg_.physics.synth_config);
+        SynthSimulationConfig sim = read_dataset_simulation(options_.data);
         sim.max_iterations = cfg_.physics.max_iterations;
         sim.tolerance = cfg_.physics.tolerance;
         simulator_ = garment_simulator_factory(character_, sim, info_.fps, cfg_.physics.ray_stiffness);

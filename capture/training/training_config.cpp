@@ -113,12 +113,12 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
     if (n["resolve_start"]) p.resolve_start = y.get<bool>(n["resolve_start"], "physics.resolve_start", "true or false");
     if (n["freeze_batch_norm"])
       p.freeze_batch_norm = y.get<bool>(n["freeze_batch_norm"], "physics.freeze_batch_norm", "true or false");
-    if (n["synth_config"]) p.synth_config = y.path(n["synth_config"], "physics.synth_config");
+    if (n["synth_config"])
+      y.fail_at(n["synth_config"], "physics.synth_config",
+                "no longer read: the garment is simulated with the settings the dataset was made with "
+                "(dataset.yaml's simulation section, which weft synth writes); remove the key, and regenerate a "
+                "dataset without that section with weft synth");
   }
-  const StageConfig& physics = c.stages[2];
-  if (physics.steps > 0 && c.physics.synth_config.empty())
-    y.fail_at(root, "physics.synth_config",
-              "missing: the physics stage simulates the garment with the simulation section of a synth config");
   return c;
 }
 

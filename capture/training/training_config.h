@@ -44,7 +44,6 @@ struct StageConfig {
 // predicted bodies, with the silhouette constraint E_cons from each frame's views, and
 // pulls each of those predictions toward its simulated state.
 struct PhysicsConfig {
-  std::string synth_config;  // the synth config whose `simulation` section sets the simulator
   int window_frames = 4;     // F: the first frame starts the simulator, the other F − 1 get targets
   int max_iterations = 30;   // Newton iterations per step in training windows
   double tolerance = 1e-2;   // looser than ground truth's 1e-3 (relative to a vertex's weight)

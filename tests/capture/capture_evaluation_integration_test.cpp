@@ -268,20 +268,30 @@ TEST(CaptureEvaluationIntegration, SkirtMovedIntoTheBodyPenetrates) {
               100 * e.penetrating_fraction, e.penetration_mean_mm, e.penetration_max_mm);
 }
 
-TEST(CaptureEvaluationIntegration, WithoutSynthConfigTheForceIsSkippedAndSaidSo) {
+TEST(CaptureEvaluationIntegration, WithoutSimulationSettingsTheForceIsSkippedAndSaidSo) {
   const fs::path capture = perfect_capture("no_synth", {0, 1, 2});
-  nlohmann::json j = nlohmann::json::parse(slurp(capture / "capture.json"));
-  j["synth_config"] = "";
-  std::ofstream(capture / "capture.json") << j.dump();
-  const CaptureEvaluation e = evaluate_capture(options(capture));
+  // A dataset from before datasets carried their simulation settings: the tiny dataset's
+  // files, its dataset.yaml without the simulation section.
+  const fs::path old = scratch_root() / "dataset_without_simulation";
+  fs::remove_all(old);
+  fs::create_directories(old);
+  for (const auto& entry : fs::directory_iterator(tiny()))
+    if (entry.path().filename() != "dataset.yaml") fs::create_symlink(entry.path(), old / entry.path().filename());
+  const std::string yaml = slurp(tiny() / "dataset.yaml");
+  ASSERT_NE(yaml.find("\nsimulation:"), std::string::npos);
+  std::ofstream(old / "dataset.yaml") << yaml.substr(0, yaml.find("\nsimulation:") + 1);
+  EvaluationOptions o = options(capture);
+  o.data = old.string();
+  const CaptureEvaluation e = evaluate_capture(o);
   EXPECT_EQ(e.oob_frames, 0);
   EXPECT_TRUE(std::isnan(e.oob_n.mean));
   ASSERT_FALSE(e.notes.empty());
   EXPECT_NE(e.notes.front().find("--synth-config"), std::string::npos);
   // --synth-config supplies it.
-  EvaluationOptions o = options(capture);
   o.synth_config = repo_file("configs/synth/tiny.yaml");
   EXPECT_EQ(evaluate_capture(o).oob_frames, 1);
+  // The dataset's own settings are the default.
+  EXPECT_EQ(evaluate_capture(options(capture)).oob_frames, 1);
 }
 
 TEST(CaptureEvaluationIntegration, BadCaptureFoldersAreErrorsNamingTheFile) {

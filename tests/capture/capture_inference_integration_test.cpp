@@ -25,7 +25,6 @@
 #include "capture/model/capture_networks.h"
 #include "capture/training/loss_log.h"
 #include "capture/model/model_folder.h"
-#include "capture/training/model_folder_writer.h"
 #include "nn/checkpoint.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
@@ -242,6 +241,16 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
   AdaptOptions no_keypoints = o;
   no_keypoints.keypoints.clear();
   expect_error([&] { adapt_model(no_keypoints); }, {"--keypoints"});
+}
+
+TEST(ModelFolder, CarriesTheSimulationOfItsDataset) {
+  // model.yaml holds the training dataset's simulation section, which is the recipe's: the
+  // folder needs neither the recipe nor the dataset to resolve collisions.
+  const Fixture& f = fixture();
+  const ModelFolder model = read_model_folder(f.model.string());
+  ASSERT_TRUE(model.simulation.has_value());
+  EXPECT_EQ(*model.simulation, read_dataset_simulation(f.data.string()));
+  EXPECT_EQ(*model.simulation, load_synth_config(repo_file("configs/synth/tiny.yaml")).simulation);
 }
 
 TEST(Infer, ResolvesCollisionsWhenAsked) {

@@ -73,9 +73,7 @@ std::string write_config(const fs::path& dir) {
          "arap: 10, attachment: 10}\n"
          "  physics: {steps: 2, batch_size: 6, lr: 5.0e-4, final_lr_fraction: 1, landmarks: 1, silhouette: 1, "
          "simulation: 1, attachment: 10, arap: 10}\n"
-         "physics: {synth_config: "
-      << repo_file("configs/synth/tiny.yaml")
-      << ", window_frames: 3, max_iterations: 15, tolerance: 1.0e-2}\n"
+         "physics: {window_frames: 3, max_iterations: 15, tolerance: 1.0e-2}\n"
          "silhouette_size: 64\nloader_threads: 0\nlog_every: 1\nvalidate_every: 0\nvalidation_samples: 2\n"
          "checkpoint_every: 100\nkeep_checkpoints: 2\nshards: 2\n";
   return path;

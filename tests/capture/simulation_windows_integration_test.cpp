@@ -69,7 +69,7 @@ const Fixture& fixture() {
     std::ofstream(config) << config_text();
     f->dir = root / "dataset";
     synthesize_dataset(load_synth_config(config.string()), f->dir.string());
-    f->sequence = load_garment_sequence(f->dir.string(), config.string());
+    f->sequence = load_garment_sequence(f->dir.string());
     f->rest = to_positions(f->sequence.character.cloth->mesh.V, f->sequence.character.metres_per_unit);
     static struct Cleanup {
       ~Cleanup() {

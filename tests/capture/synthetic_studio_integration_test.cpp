@@ -238,6 +238,13 @@ TEST(SyntheticStudio, GarmentStaysOutsideTheBodyAndSplitsAreDisjoint) {
   EXPECT_EQ(d.summary.test, (std::vector<int>{3}));
 }
 
+TEST(SyntheticStudio, TheDatasetCarriesItsSimulationSettings) {
+  // dataset.yaml holds the config's simulation section: training, evaluation and
+  // inference read the garment's material there, not from the recipe.
+  const Dataset& d = dataset();
+  EXPECT_EQ(read_dataset_simulation(d.dir.string()), d.config.simulation);
+}
+
 TEST(SyntheticStudio, OneSeedGivesIdenticalFiles) {
   REQUIRE_HUMAN();
   const Dataset& d = dataset();
@@ -399,8 +406,7 @@ TEST(SyntheticStudio, SeveralClipsMakeOneDatasetWithASimulationPerClip) {
   EXPECT_LT(from_settled, 1e-4);
   EXPECT_GT(from_walk, 0.01);
   // Simulation windows over the ground truth stay inside a clip.
-  const GarmentSequence sequence =
-      load_garment_sequence(both.string(), scratch.write("clips.yaml", clips_config(walk + squat)));
+  const GarmentSequence sequence = load_garment_sequence(both.string());
   EXPECT_EQ(sequence.segments, (std::vector<int>{0, 4}));
   EXPECT_NO_THROW(garment_window(sequence, 4, 3, sequence.cloth[3], sequence.cloth[4]));
   weft::capture::testing::expect_error(

@@ -25,14 +25,13 @@ TEST(TrainingConfig, ShippedConfigsParse) {
     ASSERT_EQ(c.stages.size(), 3u);
     EXPECT_EQ(c.stages[0].kind, StageKind::pose);
     EXPECT_GT(c.stages[2].steps, 0) << name << ": the physics stage";
-    EXPECT_TRUE(std::filesystem::exists(c.physics.synth_config)) << name;
   }
 }
 
 TEST(TrainingConfig, TheGarmentsArapFollowsTheBodysUnlessGiven) {
   const TrainingConfig c = parse_training_config(
-      "stages:\n  warmup: {steps: 2, arap: 3}\n  physics: {steps: 2, arap: 3, cloth_arap: 0.5, simulation: 1}\n"
-      "physics: {synth_config: " + repo_file("configs/synth/tiny.yaml") + "}\n", "t.yaml");
+      "stages:\n  warmup: {steps: 2, arap: 3}\n  physics: {steps: 2, arap: 3, cloth_arap: 0.5, simulation: 1}\n",
+      "t.yaml");
   EXPECT_EQ(c.stages[1].weights.cloth_arap, 3);
   EXPECT_EQ(c.stages[2].weights.cloth_arap, 0.5);
 }
@@ -63,19 +62,21 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 0}\n", "c.yaml"); }, {"c.yaml", "nothing to train"});
   expect_error([] { parse_training_config(std::string(kStages) + "network: {backbone: vgg16}\n", "c.yaml"); },
                {"c.yaml:3", "network.backbone", "vgg16"});
-  expect_error([] { parse_training_config("stages:\n  physics: {steps: 4, simulation: 1}\n", "c.yaml"); },
-               {"c.yaml", "physics.synth_config", "missing"});
+  // The garment's simulation comes from the dataset (dataset.yaml), not from a recipe's path.
   expect_error(
-      [] { parse_training_config(std::string(kStages) + "physics: {window_frames: 1, synth_config: x}\n", "c.yaml"); },
+      [] { parse_training_config("stages:\n  physics: {steps: 4, simulation: 1}\nphysics: {synth_config: x}\n", "c.yaml"); },
+      {"c.yaml:3", "physics.synth_config", "dataset.yaml"});
+  expect_error(
+      [] { parse_training_config(std::string(kStages) + "physics: {window_frames: 1}\n", "c.yaml"); },
       {"c.yaml", "physics.window_frames"});
   expect_error(
-      [] { parse_training_config(std::string(kStages) + "physics: {resolve_start: maybe, synth_config: x}\n", "c.yaml"); },
+      [] { parse_training_config(std::string(kStages) + "physics: {resolve_start: maybe}\n", "c.yaml"); },
       {"c.yaml", "physics.resolve_start", "true or false"});
   expect_error(
-      [] { parse_training_config(std::string(kStages) + "physics: {ray_stiffness: -1, synth_config: x}\n", "c.yaml"); },
+      [] { parse_training_config(std::string(kStages) + "physics: {ray_stiffness: -1}\n", "c.yaml"); },
       {"c.yaml", "physics.ray_stiffness"});
   expect_error(
-      [] { parse_training_config(std::string(kStages) + "physics: {freeze_batchnorm: true, synth_config: x}\n", "c.yaml"); },
+      [] { parse_training_config(std::string(kStages) + "physics: {freeze_batchnorm: true}\n", "c.yaml"); },
       {"c.yaml", "freeze_batchnorm"});
   expect_error([] { parse_training_config("stages:\n  warmup: {steps: 4, silhouette: 1, cloth_arap: 2}\n", "c.yaml"); },
                {"c.yaml:2", "stages.warmup.cloth_arap", "arap > 0"});

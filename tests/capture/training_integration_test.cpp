@@ -205,9 +205,7 @@ TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
                            "stages:\n  warmup: {steps: 3, batch_size: 4, lr: 1.0e-3, landmarks: 1, silhouette: 1, "
                            "arap: 10, attachment: 10}\n  physics: {steps: 2, batch_size: 6, lr: 5.0e-4, landmarks: 1, "
                            "silhouette: 1, simulation: 1, attachment: 10}\n"
-                           "physics: {synth_config: "
-                        << repo_file("configs/synth/tiny.yaml")
-                        << ", window_frames: 3, max_iterations: 60, tolerance: 1.0e-2}\n"
+                           "physics: {window_frames: 3, max_iterations: 60, tolerance: 1.0e-2}\n"
                            "silhouette_size: 64\nloader_threads: 0\nvalidate_every: 0\nvalidation_samples: 8\n";
   TrainOptions o;
   o.config = config.string();
