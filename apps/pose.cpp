@@ -30,8 +30,8 @@ void parse_frames(const std::string& s, int& first, int& last) {
   const size_t colon = s.find(':');
   long long a = 0, b = -1;
   const std::string lhs = s.substr(0, colon), rhs = colon == std::string::npos ? "" : s.substr(colon + 1);
-  if (colon == std::string::npos || (!lhs.empty() && !capture::parse_int(lhs, a)) ||
-      (!rhs.empty() && !capture::parse_int(rhs, b)) || a < 0 || (!rhs.empty() && b <= a))
+  if (colon == std::string::npos || (!lhs.empty() && !parse_int(lhs, a)) ||
+      (!rhs.empty() && !parse_int(rhs, b)) || a < 0 || (!rhs.empty() && b <= a))
     fail("--frames '", s, "': expected A:B with 0 <= A < B (frames A to B-1; A or B may be omitted)");
   first = static_cast<int>(a);
   last = rhs.empty() ? -1 : static_cast<int>(b);
@@ -40,7 +40,7 @@ void parse_frames(const std::string& s, int& first, int& last) {
 void parse_size(const std::string& s, int& w, int& h) {
   const size_t x = s.find('x');
   long long a = 0, b = 0;
-  if (x == std::string::npos || !capture::parse_int(s.substr(0, x), a) || !capture::parse_int(s.substr(x + 1), b) ||
+  if (x == std::string::npos || !parse_int(s.substr(0, x), a) || !parse_int(s.substr(x + 1), b) ||
       a <= 0 || b <= 0 || a > 16384 || b > 16384)
     fail("--image-size '", s, "': expected WxH in pixels, e.g. 640x480");
   w = static_cast<int>(a);
