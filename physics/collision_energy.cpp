@@ -98,20 +98,21 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
   return energy;
 }
 
-double CollisionEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  double alpha = 1.0;
-  auto limit = [&](const DistanceSample& s, const Eigen::Vector3d& step) {
-    // Inside the band the penalty's own Hessian already shapes the Newton step.
-    if (!(s.distance >= thickness_)) return;
-    const double target = 0.5 * thickness_;
-    const double approach = -s.gradient.dot(step);
-    if (approach > 0 && s.distance - approach < target)
-      alpha = std::min(alpha, (s.distance - target) / approach);
-  };
+void CollisionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                         Eigen::VectorXd& limits) const {
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d xi = x.segment<3>(3 * i), step = dx.segment<3>(3 * i);
+    double& alpha = limits[i];
+    auto limit = [&](const DistanceSample& s) {
+      // Inside the band the penalty's own Hessian already shapes the Newton step.
+      if (!(s.distance >= thickness_)) return;
+      const double target = 0.5 * thickness_;
+      const double approach = -s.gradient.dot(step);
+      if (approach > 0 && s.distance - approach < target)
+        alpha = std::min(alpha, (s.distance - target) / approach);
+    };
     const double reach = step.norm();
-    for (const auto& sphere : spheres_) limit(signed_distance(sphere, xi), step);
+    for (const auto& sphere : spheres_) limit(signed_distance(sphere, xi));
     for (size_t b = 0; b < bodies_.size(); ++b) {
       CacheEntry& c = cache_[b][i];
       // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
@@ -119,10 +120,9 @@ double CollisionEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd
       const DistanceSample s = signed_distance(*bodies_[b], xi);
       c.x_ref = xi;
       c.d_ref = s.distance;
-      limit(s, step);
+      limit(s);
     }
   }
-  return alpha;
 }
 
 double CollisionEnergy::min_signed_distance(const Eigen::Vector3d& x) const {

@@ -57,7 +57,8 @@ class CollisionEnergy : public Energy {
   // centimetres deep into the obstacle, and Newton spent many iterations pushing them
   // out. Vertices in the band are left to the penalty's Hessian. (For a convex obstacle
   // d is convex outside it and the first-order bound is conservative.)
-  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
+  void limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                          Eigen::VectorXd& limits) const override;
 
   // Smallest signed distance of vertex i to any obstacle (metres; +inf without obstacles).
   double min_signed_distance(const Eigen::Vector3d& x) const;

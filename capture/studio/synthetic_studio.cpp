@@ -100,7 +100,10 @@ void parse_motions(const StrictYaml& y, const YAML::Node& root, SynthConfig& c) 
 
 void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationConfig& s) {
   y.check_keys(n, "simulation.", {"enabled", "substeps", "settle_frames", "material", "collision", "pins", "solver",
-                                  "max_penetration", "friction"});
+                                  "max_penetration", "friction", "max_body_motion", "max_step_halvings"});
+  if (n["max_body_motion"]) s.max_body_motion = y.number(n["max_body_motion"], "simulation.max_body_motion", 0, 1);
+  if (n["max_step_halvings"])
+    s.max_step_halvings = static_cast<int>(y.number(n["max_step_halvings"], "simulation.max_step_halvings", 0, 10));
   if (n["friction"]) s.friction = y.number(n["friction"], "simulation.friction", 0, 10);
   if (n["enabled"]) s.enabled = y.get<bool>(n["enabled"], "simulation.enabled", "true or false");
   if (n["substeps"]) s.substeps = static_cast<int>(y.number(n["substeps"], "simulation.substeps", 1, 100));
@@ -139,7 +142,10 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
     if (p["stiffness"]) s.pin_stiffness = y.positive(p["stiffness"], "simulation.pins.stiffness");
   }
   if (const YAML::Node v = n["solver"]) {
-    y.check_keys(v, "simulation.solver.", {"max_iterations", "tolerance"});
+    y.check_keys(v, "simulation.solver.", {"max_iterations", "tolerance", "per_vertex_step_limits"});
+    if (v["per_vertex_step_limits"])
+      s.per_vertex_step_limits =
+          y.get<bool>(v["per_vertex_step_limits"], "simulation.solver.per_vertex_step_limits", "true or false");
     if (v["max_iterations"])
       s.max_iterations = static_cast<int>(y.number(v["max_iterations"], "simulation.solver.max_iterations", 1, 10000));
     if (v["tolerance"]) s.tolerance = y.positive(v["tolerance"], "simulation.solver.tolerance");
@@ -607,6 +613,8 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
         rec.metrics = m;
         nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
         entry["failed"] = rep.failed;
+        entry["substeps"] = r.substeps;  // of the attempt kept (adaptive, then halved on retries)
+        entry["residual"] = finite_or_null(r.last.residual);
         metric_frames.push_back(entry);
         cloth[f] = to_vertices(r.x, mpu);
         x2 = std::move(x1);

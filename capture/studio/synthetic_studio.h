@@ -45,6 +45,10 @@ struct SynthSimulationConfig {
   int substeps = 1;        // implicit Euler steps per frame (> 1: the frame-level out-of-balance
                            // force then includes the sub-stepping error)
   int settle_frames = 15;  // frames simulated at the first pose before the motion starts
+  // Adaptive sub-steps: a frame is split so that the body near the garment moves at most
+  // this far (m) per sub-step; 0: off (physics::SimulationSettings::max_body_motion).
+  double max_body_motion = 0.0;
+  int max_step_halvings = 3;  // retries of a failed frame at h/2, h/4, … (0: none)
   physics::ClothMaterial material{0.15, 2.0e5, 0.3, 2.0e-6, 0.001};
   double collision_thickness = 0.004;  // m
   double collision_stiffness = 1.0e4;  // N/m
@@ -56,6 +60,9 @@ struct SynthSimulationConfig {
   // stopped out of balance and every later frame failed after it.
   int max_iterations = 200;
   double tolerance = 1e-3;             // relative to each vertex's weight
+  // The collision step filter and friction's slip-reversal clamp per vertex
+  // (physics::NewtonOptions::per_vertex_step_limits) instead of one α for the whole step.
+  bool per_vertex_step_limits = false;
   double max_penetration = 0.01;       // m: a frame deeper than this counts as failed
 };
 
