@@ -23,6 +23,9 @@ void validate(const SimulationSettings& s) {
   WEFT_CHECK(s.gravity.allFinite(), "simulation: gravity must be finite");
   WEFT_CHECK(s.collision_thickness > 0, "simulation: collision thickness must be > 0 m, got ",
              s.collision_thickness);
+  WEFT_CHECK(std::isfinite(s.collision_second_sheet_deg) && s.collision_second_sheet_deg >= 0 &&
+                 s.collision_second_sheet_deg < 180,
+             "simulation: collision_second_sheet_deg must be in [0, 180) (0: off), got ", s.collision_second_sheet_deg);
   WEFT_CHECK(s.collision_stiffness > 0, "simulation: collision stiffness must be > 0 N/m, got ",
              s.collision_stiffness);
   WEFT_CHECK(std::isfinite(s.friction_velocity) && s.friction_velocity > 0,
@@ -48,6 +51,7 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
                                                 std::max(settings_.constraint_stiffness, 0.0));
   collision_ = std::make_unique<CollisionEnergy>(n, settings_.collision_thickness,
                                                  settings_.collision_stiffness);
+  collision_->set_second_sheet_angle(settings_.collision_second_sheet_deg);
   friction_ = std::make_unique<FrictionEnergy>(n, *collision_, settings_.friction_velocity,
                                                settings_.time_step / settings_.substeps);
   solver_ = std::make_unique<NewtonSolver>(

@@ -42,6 +42,10 @@ struct SimulationSettings {
   ClothMaterial material;
   double collision_thickness = 0.005;  // m
   double collision_stiffness = 1.0e4;  // N/m
+  // Degrees (0: off): a vertex in the band of a body also feels the other sheet of a
+  // crease or gap, faces turned more than this from its closest face
+  // (CollisionEnergy::set_second_sheet_angle).
+  double collision_second_sheet_deg = 0.0;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
   // creeps at under ε_v (measured 0.48 mm/s on a 20° slope with μ = 0.5). 1e-3 m/s (IPC's

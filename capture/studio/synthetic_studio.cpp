@@ -133,7 +133,9 @@ void parse_simulation(const StrictYaml& y, const YAML::Node& n, SynthSimulationC
       mat.min_area_ratio = y.number(m["min_area_ratio"], "simulation.material.min_area_ratio", 0, 0.999999);
   }
   if (const YAML::Node c = n["collision"]) {
-    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});
+    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness", "second_sheet_deg"});
+    if (c["second_sheet_deg"])
+      s.collision_second_sheet_deg = y.number(c["second_sheet_deg"], "simulation.collision.second_sheet_deg", 0, 179);
     if (c["thickness"]) s.collision_thickness = y.positive(c["thickness"], "simulation.collision.thickness");
     if (c["stiffness"]) s.collision_stiffness = y.positive(c["stiffness"], "simulation.collision.stiffness");
   }

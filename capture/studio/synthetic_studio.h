@@ -52,6 +52,7 @@ struct SynthSimulationConfig {
   physics::ClothMaterial material{0.15, 2.0e5, 0.3, 2.0e-6, 0.001};
   double collision_thickness = 0.004;  // m
   double collision_stiffness = 1.0e4;  // N/m
+  double collision_second_sheet_deg = 0.0;  // both sheets of a crease (physics::SimulationSettings); 0: off
   double pin_stiffness = 1.0e4;        // N/m
   double friction = 0.3;               // Coulomb coefficient of the garment on the body (skin)
   // Newton iterations per step. A body stepping into the skirt cuts every step through
