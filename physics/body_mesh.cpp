@@ -204,7 +204,8 @@ void BodyMesh::compute_normals() {
     }
 }
 
-ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance) const {
+template <class Accept>
+ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const {
   ClosestPoint best;
   if (nodes_.empty()) return best;
   double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance
@@ -218,6 +219,7 @@ ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distan
     if (box_distance2(x, n.lo, n.hi) >= best_d2) continue;
     if (n.left < 0) {
       for (int k = n.begin; k < n.end; ++k) {
+        if (!accept(active_[k])) continue;
         const auto& t = faces_[active_[k]];
         Region region;
         const Eigen::Vector3d p = closest_on_triangle(
@@ -268,6 +270,15 @@ ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distan
   const double unsigned_distance = std::sqrt(best_d2);
   best.distance = (x - best.point).dot(best.normal) < 0 ? -unsigned_distance : unsigned_distance;
   return best;
+}
+
+ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance) const {
+  return closest_point_where(x, max_distance, [](int) { return true; });
+}
+
+ClosestPoint BodyMesh::closest_point_facing_away(const Eigen::Vector3d& x, double max_distance,
+                                                 const Eigen::Vector3d& facing, double max_cos) const {
+  return closest_point_where(x, max_distance, [&](int f) { return face_normals_[f].dot(facing) < max_cos; });
 }
 
 }  // namespace weft::physics

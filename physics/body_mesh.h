@@ -45,6 +45,13 @@ class BodyMesh {
   // result then has face = -1 if nothing is that close).
   ClosestPoint closest_point(const Eigen::Vector3d& x,
                              double max_distance = std::numeric_limits<double>::infinity()) const;
+  // The same over the active faces whose unit normal n has n·facing < max_cos only: the
+  // closest point on another sheet of the surface than the one `facing` belongs to (the
+  // other side of a crease or of a gap between two limbs).
+  ClosestPoint closest_point_facing_away(const Eigen::Vector3d& x, double max_distance,
+                                         const Eigen::Vector3d& facing, double max_cos) const;
+  // Unit normal of face f.
+  const Eigen::Vector3d& face_normal(int f) const { return face_normals_[f]; }
 
  private:
   struct Node {
@@ -53,6 +60,9 @@ class BodyMesh {
     int begin = 0, end = 0;     // leaf range in active_
   };
   int build(int begin, int end);
+  // The closest point over the active faces `accept(face)` admits.
+  template <class Accept>
+  ClosestPoint closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const;
   void refit(int node);
   void compute_normals();
 

@@ -1,6 +1,8 @@
 #include "physics/cloth_simulator.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "graph/error.h"
 
@@ -12,9 +14,18 @@ void validate(const SimulationSettings& s) {
   WEFT_CHECK(s.substeps >= 1, "simulation: substeps must be >= 1, got ", s.substeps);
   WEFT_CHECK(s.max_step_halvings >= 0 && s.max_step_halvings <= 10,
              "simulation: max_step_halvings must be in [0, 10], got ", s.max_step_halvings);
+  WEFT_CHECK(std::isfinite(s.max_body_motion) && s.max_body_motion >= 0,
+             "simulation: max_body_motion must be >= 0 m (0: no adaptive sub-steps), got ", s.max_body_motion);
+  WEFT_CHECK(std::isfinite(s.max_body_motion_reach) && s.max_body_motion_reach >= 0,
+             "simulation: max_body_motion_reach must be >= 0 m, got ", s.max_body_motion_reach);
+  WEFT_CHECK(s.max_adaptive_substeps >= 1 && s.max_adaptive_substeps <= 1024,
+             "simulation: max_adaptive_substeps must be in [1, 1024], got ", s.max_adaptive_substeps);
   WEFT_CHECK(s.gravity.allFinite(), "simulation: gravity must be finite");
   WEFT_CHECK(s.collision_thickness > 0, "simulation: collision thickness must be > 0 m, got ",
              s.collision_thickness);
+  WEFT_CHECK(std::isfinite(s.collision_second_sheet_deg) && s.collision_second_sheet_deg >= 0 &&
+                 s.collision_second_sheet_deg < 180,
+             "simulation: collision_second_sheet_deg must be in [0, 180) (0: off), got ", s.collision_second_sheet_deg);
   WEFT_CHECK(s.collision_stiffness > 0, "simulation: collision stiffness must be > 0 N/m, got ",
              s.collision_stiffness);
   WEFT_CHECK(std::isfinite(s.friction_velocity) && s.friction_velocity > 0,
@@ -40,6 +51,7 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
                                                 std::max(settings_.constraint_stiffness, 0.0));
   collision_ = std::make_unique<CollisionEnergy>(n, settings_.collision_thickness,
                                                  settings_.collision_stiffness);
+  collision_->set_second_sheet_angle(settings_.collision_second_sheet_deg);
   friction_ = std::make_unique<FrictionEnergy>(n, *collision_, settings_.friction_velocity,
                                                settings_.time_step / settings_.substeps);
   solver_ = std::make_unique<NewtonSolver>(
@@ -130,7 +142,6 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
   WEFT_CHECK(body_prev == nullptr || !bodies_.empty(),
              "cloth step: body positions given but the simulator has no body mesh");
   const double h = settings_.time_step;
-  const int substeps = settings_.substeps;
   StepResult result;
   result.x = x_prev;
   Positions v = (x_prev - x_prev2) / h;
@@ -142,6 +153,8 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
     return result;
   }
   const Positions v_start = v;
+  const int substeps = body_now ? adaptive_substeps(x_prev, *body_prev, *body_now) : settings_.substeps;
+  result.adaptive_substeps = substeps;
   int iterations = 0;
   for (int halvings = 0;; ++halvings) {
     const int n = substeps << halvings;
@@ -175,6 +188,29 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
   last_substeps_ = result.substeps;
   result.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return result;
+}
+
+int ClothSimulator::adaptive_substeps(const Positions& x, const Eigen::MatrixX3d& body_prev,
+                                      const Eigen::MatrixX3d& body_now) const {
+  const int base = settings_.substeps;
+  if (!(settings_.max_body_motion > 0) || body_prev.rows() != body_now.rows() || x.size() == 0) return base;
+  // The cloth's bounding box, grown by the reach: body vertices outside it at both ends of
+  // the frame cannot meet the cloth within the frame unless they move further than the
+  // reach, and such a vertex is counted by its motion's end points lying on either side.
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> X(x.data(), x.size() / 3, 3);
+  const Eigen::RowVector3d lo = X.colwise().minCoeff().array() - settings_.max_body_motion_reach;
+  const Eigen::RowVector3d hi = X.colwise().maxCoeff().array() + settings_.max_body_motion_reach;
+  auto inside = [&](const Eigen::RowVector3d& p) { return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all(); };
+  double motion = 0;
+  for (Eigen::Index i = 0; i < body_now.rows(); ++i) {
+    const Eigen::RowVector3d a = body_prev.row(i), b = body_now.row(i);
+    const double d = (b - a).norm();
+    if (d <= motion) continue;
+    if (inside(a) || inside(b) || d > settings_.max_body_motion_reach) motion = d;
+  }
+  if (!std::isfinite(motion)) return base;
+  const double needed = std::ceil(motion / settings_.max_body_motion - 1e-9);  // round-off: 0.1 / 0.01 is 10
+  return std::clamp(static_cast<int>(std::min(needed, 1e6)), base, std::max(base, settings_.max_adaptive_substeps));
 }
 
 Positions ClothSimulator::total_force(const Positions& x) const {

@@ -29,10 +29,23 @@ struct SimulationSettings {
   // so the solve is better conditioned. Only then is the frame reported as failed. 0
   // turns the retries off.
   int max_step_halvings = 3;
+  // Adaptive sub-steps (m; 0 turns them off): a frame with a moving body is split into
+  // enough sub-steps that no body vertex near the cloth (within max_body_motion_reach of
+  // the cloth's bounding box) moves more than this per sub-step, so a limb that sweeps
+  // through the garment's band in one frame is met in pieces no longer than a few
+  // collision thicknesses. Never fewer than `substeps`, never more than
+  // max_adaptive_substeps; the retries then halve from there.
+  double max_body_motion = 0.0;
+  double max_body_motion_reach = 0.05;  // m
+  int max_adaptive_substeps = 16;
   Vec3 gravity{0.0, -9.81, 0.0};  // m/s²
   ClothMaterial material;
   double collision_thickness = 0.005;  // m
   double collision_stiffness = 1.0e4;  // N/m
+  // Degrees (0: off): a vertex in the band of a body also feels the other sheet of a
+  // crease or gap, faces turned more than this from its closest face
+  // (CollisionEnergy::set_second_sheet_angle).
+  double collision_second_sheet_deg = 0.0;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
   // creeps at under ε_v (measured 0.48 mm/s on a 20° slope with μ = 0.5). 1e-3 m/s (IPC's
@@ -64,7 +77,8 @@ struct StepResult {
   Positions x;                 // 3n, finite: the last good state if a step failed
   StepStatus status = StepStatus::converged;  // worst over sub-steps
   int newton_iterations = 0;   // summed over sub-steps and retries
-  int substeps = 1;            // of the attempt returned (settings' substeps × 2^retries)
+  int substeps = 1;            // of the attempt returned (the frame's sub-steps × 2^retries)
+  int adaptive_substeps = 1;   // the frame's sub-steps before any retry (≥ settings' substeps)
   double gradient_norm = 0;    // ‖∇E‖∞ after the last sub-step, N
   double energy = 0;           // incremental potential after the last sub-step, J
   double step_ms = 0;
@@ -121,6 +135,11 @@ class ClothSimulator {
   // motion).
   // With one sub-step this is the friction Newton balanced at the end of that frame.
   Positions friction_force(const Positions& x_prev, const Positions& x) const;
+  // Sub-steps for a frame whose body moves from body_prev to body_now: the settings'
+  // substeps, raised so that no body vertex near the cloth at x moves more than
+  // max_body_motion per sub-step (see SimulationSettings).
+  int adaptive_substeps(const Positions& x, const Eigen::MatrixX3d& body_prev,
+                        const Eigen::MatrixX3d& body_now) const;
   // Smallest signed distance of a point to any obstacle (m; +inf without obstacles).
   double signed_distance(const Vec3& p) const { return collision_->min_signed_distance(p); }
 

@@ -1,6 +1,7 @@
 #include "physics/collision_energy.h"
 
 #include <Eigen/Eigenvalues>
+#include <cmath>
 
 #include "graph/error.h"
 
@@ -50,6 +51,13 @@ CollisionEnergy::CollisionEnergy(int num_vertices, double thickness, double stif
   WEFT_CHECK(stiffness > 0, "collision: stiffness must be > 0 N/m, got ", stiffness);
 }
 
+void CollisionEnergy::set_second_sheet_angle(double degrees) {
+  WEFT_CHECK(std::isfinite(degrees) && degrees >= 0 && degrees < 180,
+             "collision: second_sheet_angle must be in [0, 180) degrees (0: off), got ", degrees);
+  second_sheet_deg_ = degrees;
+  second_sheet_cos_ = degrees > 0 ? std::cos(degrees * M_PI / 180.0) : 2.0;
+}
+
 void CollisionEnergy::set_bodies(std::vector<const BodyMesh*> bodies) {
   bodies_ = std::move(bodies);
   invalidate_cache();
@@ -89,29 +97,36 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
     for (size_t b = 0; b < bodies_.size(); ++b) {
       CacheEntry& c = cache_[b][i];
       if (c.d_ref > thickness_ && (xi - c.x_ref).norm() < c.d_ref - thickness_) continue;
-      const DistanceSample s = signed_distance(*bodies_[b], xi);
+      const ClosestPoint cp = bodies_[b]->closest_point(xi);
+      const DistanceSample s = signed_distance(cp, xi);
       c.x_ref = xi;
       c.d_ref = s.distance;
       energy += add_penalty(i, s, g, H);
+      if (second_sheet_cos_ <= 1 && cp.face >= 0 && s.distance < thickness_) {
+        const ClosestPoint other = bodies_[b]->closest_point_facing_away(
+            xi, thickness_, bodies_[b]->face_normal(cp.face), second_sheet_cos_);
+        if (other.face >= 0) energy += add_penalty(i, signed_distance(other, xi), g, H);
+      }
     }
   }
   return energy;
 }
 
-double CollisionEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  double alpha = 1.0;
-  auto limit = [&](const DistanceSample& s, const Eigen::Vector3d& step) {
-    // Inside the band the penalty's own Hessian already shapes the Newton step.
-    if (!(s.distance >= thickness_)) return;
-    const double target = 0.5 * thickness_;
-    const double approach = -s.gradient.dot(step);
-    if (approach > 0 && s.distance - approach < target)
-      alpha = std::min(alpha, (s.distance - target) / approach);
-  };
+void CollisionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                         Eigen::VectorXd& limits) const {
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d xi = x.segment<3>(3 * i), step = dx.segment<3>(3 * i);
+    double& alpha = limits[i];
+    auto limit = [&](const DistanceSample& s) {
+      // Inside the band the penalty's own Hessian already shapes the Newton step.
+      if (!(s.distance >= thickness_)) return;
+      const double target = 0.5 * thickness_;
+      const double approach = -s.gradient.dot(step);
+      if (approach > 0 && s.distance - approach < target)
+        alpha = std::min(alpha, (s.distance - target) / approach);
+    };
     const double reach = step.norm();
-    for (const auto& sphere : spheres_) limit(signed_distance(sphere, xi), step);
+    for (const auto& sphere : spheres_) limit(signed_distance(sphere, xi));
     for (size_t b = 0; b < bodies_.size(); ++b) {
       CacheEntry& c = cache_[b][i];
       // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
@@ -119,10 +134,9 @@ double CollisionEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd
       const DistanceSample s = signed_distance(*bodies_[b], xi);
       c.x_ref = xi;
       c.d_ref = s.distance;
-      limit(s, step);
+      limit(s);
     }
   }
-  return alpha;
 }
 
 double CollisionEnergy::min_signed_distance(const Eigen::Vector3d& x) const {

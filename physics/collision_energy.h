@@ -42,6 +42,15 @@ class CollisionEnergy : public Energy {
   const std::vector<SphereObstacle>& spheres() const { return spheres_; }
   const std::vector<const BodyMesh*>& bodies() const { return bodies_; }
   double thickness() const { return thickness_; }
+  // Both sheets of a crease or a gap: a vertex within the band of a body's closest face
+  // also feels the closest face whose normal differs from that face's by more than
+  // `degrees` (the other side of the crease between thigh and belly, the other thigh),
+  // if it too is within the band. With the closest face alone, a vertex pinched between
+  // two sheets sits on their medial surface, where the closest face switches and the
+  // penalty's gradient jumps: Newton then stalls at a kink instead of an equilibrium.
+  // The sum is continuous across the switch. 0 turns it off (the closest face only).
+  void set_second_sheet_angle(double degrees);
+  double second_sheet_angle() const { return second_sheet_deg_; }
   double stiffness() const { return k_; }
   // The penalty's force magnitude −dE/dd at signed distance d (N; 0 outside the band).
   double normal_force(double d) const {
@@ -57,7 +66,8 @@ class CollisionEnergy : public Energy {
   // centimetres deep into the obstacle, and Newton spent many iterations pushing them
   // out. Vertices in the band are left to the penalty's Hessian. (For a convex obstacle
   // d is convex outside it and the first-order bound is conservative.)
-  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
+  void limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                          Eigen::VectorXd& limits) const override;
 
   // Smallest signed distance of vertex i to any obstacle (metres; +inf without obstacles).
   double min_signed_distance(const Eigen::Vector3d& x) const;
@@ -69,6 +79,7 @@ class CollisionEnergy : public Energy {
 
   int n_;
   double thickness_, k_;
+  double second_sheet_deg_ = 0, second_sheet_cos_ = 2;  // off: no normal is that far
   std::vector<SphereObstacle> spheres_;
   std::vector<const BodyMesh*> bodies_;
   // Per body and vertex: where the distance was last queried and its value. Distance is

@@ -30,12 +30,22 @@ class Energy {
     (void)c;
     return false;
   }
-  // The largest α in (0, 1] this energy lets a step x + α·dx take (a filter applied before
-  // the line search, e.g. against passing through obstacles); 1 when unrestricted.
-  virtual double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  // Per-vertex step limits: lowers limits[i] (n entries, in (0, 1]) to the largest
+  // fraction of its own move dx_i that vertex i may take from x (e.g. not closer than
+  // half the collision thickness to an obstacle, not past a friction slip reversal).
+  // Leaves limits unchanged where this energy does not restrict the step.
+  virtual void limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                  Eigen::VectorXd& limits) const {
     (void)x;
     (void)dx;
-    return 1.0;
+    (void)limits;
+  }
+  // The largest α in (0, 1] this energy lets the whole step x + α·dx take: the smallest
+  // of its per-vertex limits (a filter applied before the line search).
+  virtual double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+    Eigen::VectorXd limits = Eigen::VectorXd::Ones(x.size() / 3);
+    limit_vertex_steps(x, dx, limits);
+    return limits.size() > 0 ? limits.minCoeff() : 1.0;
   }
   // Called once at the start of each time step, before any evaluate().
   virtual void begin_step(const Eigen::VectorXd& x_start) { (void)x_start; }

@@ -144,4 +144,18 @@ double FrictionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
   return energy;
 }
 
+void FrictionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                        Eigen::VectorXd& limits) const {
+  const double eps = smoothing();
+  for (const Contact& c : contacts_) {
+    const Eigen::Vector2d u0 = c.T.transpose() * (x.segment<3>(3 * c.vertex) - c.x_start - c.motion);
+    if (!(u0.norm() > eps)) continue;  // already in the smooth regime
+    const Eigen::Vector2d du = c.T.transpose() * dx.segment<3>(3 * c.vertex);
+    if (!(u0.dot(u0 + du) < 0)) continue;  // no reversal along this move
+    // u0 + t·du is closest to zero at t* = −u0·du/‖du‖² (in (0, 1) for a reversal).
+    const double t = -u0.dot(du) / du.squaredNorm();
+    if (t > 0 && t < limits[c.vertex]) limits[c.vertex] = t;
+  }
+}
+
 }  // namespace weft::physics

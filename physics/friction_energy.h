@@ -42,6 +42,17 @@ class FrictionEnergy : public Energy {
   // sub-steps, for a frame whose sub-steps moved the body linearly).
   void lag(const Eigen::VectorXd& x_start, double body_motion_scale = 1.0);
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const override;
+  // Slip-reversal clamp: a contact slipping faster than ε whose move dx_i would carry its
+  // slip u through zero (u at x and at x + dx_i pointing apart) may go only as far as the
+  // point of the move closest to zero slip. Past it the force flips by 2μλ across a kink
+  // only ε wide; stopping there leaves the vertex in the smooth static regime, where the
+  // next Newton step sees the right curvature, instead of an overshoot the global line
+  // search pays for on every vertex.
+  void limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                          Eigen::VectorXd& limits) const override;
+  // The clamp is a per-vertex device only: as a cap on the whole step it would stop the
+  // whole garment at one vertex's reversal.
+  double max_step(const Eigen::VectorXd&, const Eigen::VectorXd&) const override { return 1.0; }
 
   int num_contacts() const { return static_cast<int>(contacts_.size()); }
   double smoothing() const { return velocity_threshold_ * h_; }  // ε, m

@@ -185,6 +185,12 @@ double NewtonSolver::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& d
   return alpha;
 }
 
+Eigen::VectorXd NewtonSolver::vertex_step_limits(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  Eigen::VectorXd limits = Eigen::VectorXd::Ones(n_);
+  for (const Energy* en : energies_) en->limit_vertex_steps(x, dx, limits);
+  return limits;
+}
+
 double NewtonSolver::search_negative_curvature(const Eigen::VectorXd& g, double reach, Eigen::VectorXd& x_new,
                                               double& e_new, Eigen::VectorXd& x_trial,
                                               NewtonReport& report) const {
@@ -275,10 +281,10 @@ void NewtonSolver::print_trace(int it, const Eigen::VectorXd& x, const Eigen::Ve
   }
   static const char* outcomes[] = {"converged", "negative_curvature", "too_slow"};
   std::fprintf(stderr,
-               "it %d E %.12g res %.3e |d| %.2e filter %.3g alpha %g backtracks %d "
+               "it %d E %.12g res %.3e |d| %.2e filter %.3g limited %d alpha %g backtracks %d "
                "curvature_step %.2e decrease %.3e predicted %.3e ratio %.3f cg %d %s delta %.2e "
                "fact %d corr %d worst v%d |dx| %.2e m:%s%s\n",
-               it, e, worst_r, d.lpNorm<Eigen::Infinity>(), t.filter, alpha, t.backtracks,
+               it, e, worst_r, d.lpNorm<Eigen::Infinity>(), t.filter, t.limited_vertices, alpha, t.backtracks,
                t.curvature_step, actual, predicted,
                predicted != 0 ? actual / predicted : 0.0, report.cg_iterations - t.cg_before,
                exact_differs_ ? outcomes[static_cast<int>(last_cg_outcome_)] : "none", delta_,
@@ -324,8 +330,28 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     trace.cg_before = report.cg_iterations;
     for (int retry = 0; retry < 4 && !accepted; ++retry) {
       if (!direction(x, g, d, report)) break;
+      double alpha = 1.0;
+      trace.limited_vertices = 0;
+      if (options_.per_vertex_step_limits) {
+        const Eigen::VectorXd limits = vertex_step_limits(x, d);
+        if (limits.minCoeff() < 1.0) {
+          Eigen::VectorXd limited = d;
+          for (int i = 0; i < n_; ++i)
+            if (limits[i] < 1.0) {
+              limited.segment<3>(3 * i) *= std::max(limits[i], 0.0);
+              ++trace.limited_vertices;
+            }
+          if (g.dot(limited) < 0)
+            d.swap(limited);
+          else
+            alpha = max_step(x, d);  // not a descent direction: the global filter
+        }
+        // Friction's clamp does not cap the whole step (FrictionEnergy::max_step), the
+        // collision's does: the limited move already meets it.
+      } else {
+        alpha = max_step(x, d);
+      }
       const double slope = g.dot(d);
-      double alpha = max_step(x, d);
       trace.filter = alpha;
       trace.backtracks = 0;
       double e_accept = 0;

@@ -57,6 +57,13 @@ struct NewtonOptions {
   // direct: when CG stopped at non-positive curvature, also search along that direction
   // from the accepted point (energy evaluations only; see search_negative_curvature).
   bool negative_curvature_search = true;
+  // The step filter per vertex instead of over the whole step: each vertex's move is cut
+  // to its own limit (Energy::limit_vertex_steps: half the collision thickness from an
+  // obstacle, a friction slip reversal) and the line search starts from the full, so
+  // limited, step; one vertex near a leg no longer holds back the whole garment. Falls
+  // back to the global filter (the smallest limit for every vertex) when the limited
+  // move is not a descent direction.
+  bool per_vertex_step_limits = false;
 };
 
 struct NewtonReport {
@@ -100,6 +107,8 @@ class NewtonSolver {
   // The step filter: the largest α ≤ 1 that every energy admits for x + α·dx
   // (Energy::max_step).
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
+  // Every energy's per-vertex limits for the move dx from x (n entries in (0, 1]).
+  Eigen::VectorXd vertex_step_limits(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
 
  private:
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
@@ -122,6 +131,7 @@ class NewtonSolver {
                                    NewtonReport& report) const;
   struct IterationTrace {
     double filter = 1.0;       // the step filter's cap on α
+    int limited_vertices = 0;  // per-vertex filter: vertices whose move was cut
     int backtracks = 0;
     double curvature_step = 0;  // m, from search_negative_curvature
     int cg_before = 0;

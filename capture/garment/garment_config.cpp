@@ -10,7 +10,10 @@ namespace weft::capture {
 
 void parse_simulation_config(const StrictYaml& y, const YAML::Node& n, SynthSimulationConfig& s) {
   y.check_keys(n, "simulation.", {"enabled", "substeps", "settle_frames", "material", "collision", "pins", "solver",
-                                  "max_penetration", "friction"});
+                                  "max_penetration", "friction", "max_body_motion", "max_step_halvings"});
+  if (n["max_body_motion"]) s.max_body_motion = y.number(n["max_body_motion"], "simulation.max_body_motion", 0, 1);
+  if (n["max_step_halvings"])
+    s.max_step_halvings = static_cast<int>(y.number(n["max_step_halvings"], "simulation.max_step_halvings", 0, 10));
   if (n["friction"]) s.friction = y.number(n["friction"], "simulation.friction", 0, 10);
   if (n["enabled"]) s.enabled = y.get<bool>(n["enabled"], "simulation.enabled", "true or false");
   if (n["substeps"]) s.substeps = static_cast<int>(y.number(n["substeps"], "simulation.substeps", 1, 100));
@@ -18,7 +21,9 @@ void parse_simulation_config(const StrictYaml& y, const YAML::Node& n, SynthSimu
     s.settle_frames = static_cast<int>(y.number(n["settle_frames"], "simulation.settle_frames", 0, 10000));
   if (const YAML::Node m = n["material"]) physics::read_cloth_material(y, m, "simulation.material", s.material);
   if (const YAML::Node c = n["collision"]) {
-    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness"});
+    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness", "second_sheet_deg"});
+    if (c["second_sheet_deg"])
+      s.collision_second_sheet_deg = y.number(c["second_sheet_deg"], "simulation.collision.second_sheet_deg", 0, 179);
     if (c["thickness"]) s.collision_thickness = y.positive(c["thickness"], "simulation.collision.thickness");
     if (c["stiffness"]) s.collision_stiffness = y.positive(c["stiffness"], "simulation.collision.stiffness");
   }
@@ -27,7 +32,10 @@ void parse_simulation_config(const StrictYaml& y, const YAML::Node& n, SynthSimu
     if (p["stiffness"]) s.pin_stiffness = y.positive(p["stiffness"], "simulation.pins.stiffness");
   }
   if (const YAML::Node v = n["solver"]) {
-    y.check_keys(v, "simulation.solver.", {"max_iterations", "tolerance"});
+    y.check_keys(v, "simulation.solver.", {"max_iterations", "tolerance", "per_vertex_step_limits"});
+    if (v["per_vertex_step_limits"])
+      s.per_vertex_step_limits =
+          y.get<bool>(v["per_vertex_step_limits"], "simulation.solver.per_vertex_step_limits", "true or false");
     if (v["max_iterations"])
       s.max_iterations = static_cast<int>(y.number(v["max_iterations"], "simulation.solver.max_iterations", 1, 10000));
     if (v["tolerance"]) s.tolerance = y.positive(v["tolerance"], "simulation.solver.tolerance");
@@ -51,13 +59,16 @@ std::string simulation_config_yaml(const SynthSimulationConfig& s) {
   return std::string("simulation:\n") + "  enabled: " + (s.enabled ? "true" : "false") + "\n" +
          "  substeps: " + std::to_string(s.substeps) + "\n" +
          "  settle_frames: " + std::to_string(s.settle_frames) + "\n" +
+         "  max_body_motion: " + yaml_number(s.max_body_motion) + "\n" +
+         "  max_step_halvings: " + std::to_string(s.max_step_halvings) + "\n" +
          "  material: " + physics::cloth_material_yaml(s.material) + "\n" +
          "  collision: {thickness: " + yaml_number(s.collision_thickness) +
-         ", stiffness: " + yaml_number(s.collision_stiffness) + "}\n" +
+         ", stiffness: " + yaml_number(s.collision_stiffness) +
+         ", second_sheet_deg: " + yaml_number(s.collision_second_sheet_deg) + "}\n" +
          "  pins: {stiffness: " + yaml_number(s.pin_stiffness) + "}\n" +
          "  friction: " + yaml_number(s.friction) + "\n" +
          "  solver: {max_iterations: " + std::to_string(s.max_iterations) + ", tolerance: " + yaml_number(s.tolerance) +
-         "}\n" +
+         ", per_vertex_step_limits: " + (s.per_vertex_step_limits ? "true" : "false") + "}\n" +
          "  max_penetration: " + yaml_number(s.max_penetration) + "\n";
 }
 

@@ -21,12 +21,16 @@ physics::SimulationSettings garment_simulation_settings(const SynthSimulationCon
   physics::SimulationSettings settings;
   settings.time_step = 1.0 / fps;
   settings.substeps = s.substeps;
+  settings.max_body_motion = s.max_body_motion;
+  settings.max_step_halvings = s.max_step_halvings;
   settings.material = s.material;
   settings.collision_thickness = s.collision_thickness;
   settings.collision_stiffness = s.collision_stiffness;
+  settings.collision_second_sheet_deg = s.collision_second_sheet_deg;
   settings.pin_stiffness = s.pin_stiffness;
   settings.newton.max_iterations = s.max_iterations;
   settings.newton.tolerance = s.tolerance;
+  settings.newton.per_vertex_step_limits = s.per_vertex_step_limits;
   if (ray_stiffness >= 0) settings.constraint_stiffness = ray_stiffness;
   return settings;
 }

@@ -553,6 +553,8 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
         rec.metrics = m;
         nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
         entry["failed"] = rep.failed;
+        entry["substeps"] = r.substeps;  // of the attempt kept (adaptive, then halved on retries)
+        entry["residual"] = finite_or_null(r.last.residual);
         metric_frames.push_back(entry);
         cloth[f] = to_vertices(r.x, mpu);
         x2 = std::move(x1);

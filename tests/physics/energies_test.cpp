@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include "graph/error.h"
 #include "physics/bending_energy.h"
 #include "physics/cloth_model.h"
 #include "physics/collision_energy.h"
@@ -346,6 +347,49 @@ TEST(Energies, MeshCollisionMatchesFiniteDifferences) {
   CollisionEnergy e(n, 0.05, 1e4);
   e.set_bodies({&box});
   testing::expect_derivatives_match(e, x);
+}
+
+// Two boxes 6 mm apart in one body mesh (two thighs): a vertex in the gap is within the
+// 4 mm band of both. With the closest face alone the penalty's force jumps from one wall's
+// push to the other's as the vertex crosses the medial plane, so no point of the gap is
+// an equilibrium Newton can reach; with the second sheet on, the force is continuous, zero
+// on the medial plane, and derivatives match finite differences on either side.
+TEST(Energies, AVertexBetweenTwoSheetsFeelsBothWhenTheSecondSheetIsOn) {
+  const BodyMesh left = testing::cube(Vec3(-0.503, 0, 0), 0.5), right = testing::cube(Vec3(0.503, 0, 0), 0.5);
+  Eigen::MatrixX3d v(16, 3);
+  v << left.vertices(), right.vertices();
+  std::vector<std::array<int, 3>> f = left.faces();
+  for (auto t : right.faces()) f.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
+  const BodyMesh gap(v, f);  // walls at x = ±3 mm
+  auto force_x = [&](const CollisionEnergy& e, double x) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(3);
+    e.evaluate(Eigen::Vector3d(x, 0.1, 0.2), &g, nullptr);
+    return -g[0];
+  };
+  CollisionEnergy closest_only(1, 0.004, 1e4);
+  closest_only.set_bodies({&gap});
+  CollisionEnergy both(1, 0.004, 1e4);
+  both.set_bodies({&gap});
+  both.set_second_sheet_angle(45);
+  const double h = 1e-7;
+  // Closest face only: pushed right just left of the middle, left just right of it.
+  EXPECT_GT(force_x(closest_only, -h), 1.0);
+  EXPECT_LT(force_x(closest_only, h), -1.0);
+  // Both sheets: continuous, zero in the middle, restoring on either side.
+  EXPECT_NEAR(force_x(both, -h), force_x(both, h), 1e-3);
+  EXPECT_NEAR(force_x(both, 0.0), 0.0, 1e-9);
+  EXPECT_GT(force_x(both, -0.0005), 0.0);
+  EXPECT_LT(force_x(both, 0.0005), 0.0);
+  // A vertex near one wall only (the other beyond the band) feels that wall alone.
+  EXPECT_EQ(force_x(both, -0.0025), force_x(closest_only, -0.0025));
+  Eigen::VectorXd x(6);
+  x << -0.0005, 0.1, 0.2, 0.0007, -0.2, 0.1;  // within the band of both walls
+  CollisionEnergy both2(2, 0.004, 1e4);
+  both2.set_bodies({&gap});
+  both2.set_second_sheet_angle(45);
+  testing::expect_derivatives_match(both2, x);
+  EXPECT_THROW(both.set_second_sheet_angle(180), weft::Error);
+  EXPECT_THROW(both.set_second_sheet_angle(-1), weft::Error);
 }
 
 TEST(Energies, BodyMeshSignedDistance) {

@@ -328,5 +328,44 @@ TEST(Friction, AcceptedStepsNeverIncreaseTheEnergyWithFriction) {
   EXPECT_GT(contact_steps, 20);
 }
 
+
+// The slip-reversal clamp (FrictionEnergy::limit_vertex_steps): a sliding contact whose
+// move would carry its slip through zero stops where the move passes closest to zero
+// slip; a move that keeps the slip's direction, a contact in the smooth regime and a
+// vertex with no contact are left alone, and the clamp never caps the whole step.
+TEST(Friction, ASlipReversalStopsAtTheMovesPointClosestToZeroSlip) {
+  const int n = 4;
+  const Vec3 p = on_sphere(Vec3(0, 1, 0), 0.01);  // in the band, on top: tangents x and z
+  Eigen::VectorXd x_start(3 * n), x(3 * n), dx = Eigen::VectorXd::Zero(3 * n);
+  for (int i = 0; i < 3; ++i) x_start.segment<3>(3 * i) = p;
+  x_start.segment<3>(9) = on_sphere(Vec3(0, 0, 1), 0.2);  // outside the band
+  x = x_start;
+  x.segment<3>(0) += Vec3(0.004, 0, 0);    // sliding: 4 mm of slip (ε = 1 mm)
+  dx.segment<3>(0) = Vec3(-0.010, 0, 0);   // back through zero to −6 mm: stop at t = 0.4
+  x.segment<3>(3) += Vec3(0.004, 0, 0);
+  dx.segment<3>(3) = Vec3(0.003, 0, 0);    // further the same way: no limit
+  x.segment<3>(6) += Vec3(0.0005, 0, 0);   // static regime (0.5 mm < ε)
+  dx.segment<3>(6) = Vec3(-0.002, 0, 0);
+  x.segment<3>(9) += Vec3(0.004, 0, 0);
+  dx.segment<3>(9) = Vec3(-0.010, 0, 0);
+
+  CollisionEnergy collision(n, kDelta, kStiffness);
+  collision.set_spheres({{Vec3::Zero(), 0.5, 0.4}});
+  FrictionEnergy friction(n, collision, kVelocity, kStep);
+  friction.set_body_friction({});
+  friction.begin_step(x_start);
+  ASSERT_EQ(friction.num_contacts(), 3);
+  Eigen::VectorXd limits = Eigen::VectorXd::Ones(n);
+  friction.limit_vertex_steps(x, dx, limits);
+  EXPECT_NEAR(limits[0], 0.4, 1e-12);
+  EXPECT_EQ(limits[1], 1.0);
+  EXPECT_EQ(limits[2], 1.0);
+  EXPECT_EQ(limits[3], 1.0);
+  // At the limit the slip is (to round-off) zero: the vertex is back in the static regime.
+  const Vec3 stopped = x.segment<3>(0) + limits[0] * dx.segment<3>(0);
+  EXPECT_LT((stopped - x_start.segment<3>(0)).norm(), 1e-12);
+  EXPECT_EQ(friction.max_step(x, dx), 1.0);
+}
+
 }  // namespace
 }  // namespace weft::physics

@@ -259,6 +259,76 @@ TEST(Simulator, AFailedFrameIsRetriedFromItsStartWithHalvedSteps) {
   EXPECT_THROW(validate(bad), weft::Error);
 }
 
+// Adaptive sub-steps (SimulationSettings::max_body_motion): a body that moves 10 cm
+// through the cloth's neighbourhood in one frame is met in sub-steps of at most 1 cm; the
+// frame equals a simulator configured with that many sub-steps; a body that moves as far
+// well away from the cloth adds none, and neither does a slow one.
+TEST(Simulator, AFastBodyNearTheClothIsMetInSubStepsNoLongerThanMaxBodyMotion) {
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.3, 0.6, -0.3), 0.6, 0.6, 8, 8, "xz", 0.2);
+  SimulationSettings s = settings(1.0 / 30);
+  s.max_body_motion = 0.01;
+  auto make = [&](const SimulationSettings& t) {
+    auto sim = std::make_unique<ClothSimulator>(mesh, t);
+    sim->add_body(testing::uv_sphere(Vec3(0, 0.3, 0), 0.2));
+    return sim;
+  };
+  auto sim = make(s);
+  const Eigen::MatrixX3d start = sim->body(0).vertices();
+  Eigen::MatrixX3d rising = start;
+  rising.col(1).array() += 0.1;  // the sphere's top from 0.5 m to 0.6 m: into the cloth
+  EXPECT_EQ(sim->adaptive_substeps(mesh.rest, start, rising), 10);
+  Eigen::MatrixX3d slow = start;
+  slow.col(1).array() += 0.004;
+  EXPECT_EQ(sim->adaptive_substeps(mesh.rest, start, slow), 1);
+  Eigen::MatrixX3d far_start = start, far_moved = start;
+  far_start.col(0).array() += 3.0;
+  far_moved.col(0).array() += 3.0;
+  far_moved.col(1).array() += 0.04;  // 4 cm, 3 m away: beyond the 5 cm reach of the cloth's box
+  EXPECT_EQ(sim->adaptive_substeps(mesh.rest, far_start, far_moved), 1);
+
+  const StepResult adaptive = sim->step(mesh.rest, mesh.rest, &start, &rising);
+  ASSERT_EQ(adaptive.status, StepStatus::converged);
+  EXPECT_EQ(adaptive.adaptive_substeps, 10);
+  EXPECT_EQ(adaptive.substeps, 10);
+  SimulationSettings fixed = settings(1.0 / 30);
+  fixed.substeps = 10;
+  const StepResult direct = make(fixed)->step(mesh.rest, mesh.rest, &start, &rising);
+  ASSERT_EQ(direct.status, StepStatus::converged);
+  EXPECT_EQ((adaptive.x - direct.x).cwiseAbs().maxCoeff(), 0.0);
+  // The cloth rests on the risen sphere, outside it.
+  FrameMetrics m;
+  measure_penetration(*sim, adaptive.x, m);
+  EXPECT_EQ(m.penetrating_vertices, 0);
+
+  SimulationSettings bad = s;
+  bad.max_body_motion = -0.01;
+  EXPECT_THROW(validate(bad), weft::Error);
+  bad = s;
+  bad.max_adaptive_substeps = 0;
+  EXPECT_THROW(validate(bad), weft::Error);
+}
+
+// The per-vertex step filter (NewtonOptions::per_vertex_step_limits) keeps the laws the
+// global one keeps: a cloth dropped onto a sphere converges every frame to equilibrium and
+// no vertex goes deeper than the collision band.
+TEST(Simulator, PerVertexStepLimitsConvergeWithoutPenetration) {
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.5, 0.56, -0.5), 1.0, 1.0, 16, 16, "xz", 0.2);
+  SimulationSettings s = settings(1.0 / 30);
+  s.newton.per_vertex_step_limits = true;
+  ClothSimulator sim(mesh, s);
+  sim.add_body(testing::uv_sphere(Vec3(0, 0.25, 0), 0.3, 24, 48));
+  Positions x2 = mesh.rest, x1 = mesh.rest;
+  for (int f = 0; f < 20; ++f) {
+    const StepResult r = sim.step(x2, x1);
+    ASSERT_EQ(r.status, StepStatus::converged) << "frame " << f;
+    FrameMetrics m;
+    measure_penetration(sim, r.x, m);
+    EXPECT_LE(m.penetration_max, s.collision_thickness) << "frame " << f;
+    x2 = x1;
+    x1 = r.x;
+  }
+}
+
 TEST(Simulator, NonFiniteInputIsReportedAndNeverReturned) {
   ClothMesh mesh = make_grid_cloth(Vec3(0, 1, 0), 0.4, 0.4, 5, 5, "xz", 0.2);
   ClothSimulator sim(mesh, settings(0.01));
