@@ -95,7 +95,9 @@ int64_t run_and_kill(const fs::path& run, int64_t kill_at, bool resume) {
     ::_exit(127);
   }
   int64_t logged = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  // A stall, not a slow machine: one run of the tiny config takes 10–40 s alone, and CI's
+  // 2 cores may be shared (the fresh-machine run of 2026-12-03, load 5, hit 120 s).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
   while (std::chrono::steady_clock::now() < deadline) {
     try {
       const auto rows = read_loss_log((run / "losses.csv").string());
