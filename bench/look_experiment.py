@@ -69,7 +69,7 @@ def main():
         for arm in arms:
             e = load(os.path.join(a.out, f"{arm}_s{s}", "evaluation_test.json"))
             rot = per_prediction(e, "root_rotation_error_deg")
-            jnt = per_prediction(e, "joint_error_mm")
+            jnt = per_prediction(e, "mpjpe_mm")
             for k, v in rot.items():
                 per[arm][(s,) + k] = v
             for k, v in jnt.items():

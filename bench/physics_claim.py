@@ -20,17 +20,17 @@ import sys
 METRICS = [
     ("penetration_mean_all_mm", "penetration_mean_all_mm", "ratio"),
     ("penetrating_fraction", "penetrating_fraction", "ratio"),
-    ("oob_force_mean_n", "oob_mean_n", "ratio"),
-    ("oob_force_p95_n", "oob_p95_n", "ratio"),
-    ("oob_force_max_n", "oob_max_n", "ratio"),
-    ("oob_force_outside_mean_n", "oob_outside_mean_n", "ratio"),
+    ("oob_force_mean_n", "oob_force_mean_n", "ratio"),
+    ("oob_force_p95_n", "oob_force_p95_n", "ratio"),
+    ("oob_force_max_n", "oob_force_max_n", "ratio"),
+    ("oob_force_outside_mean_n", "oob_force_outside_mean_n", "ratio"),
     ("inertia_mean_n", "inertia_mean_n", "ratio"),
     ("elastic_mean_n", "elastic_mean_n", "ratio"),
     ("collision_mean_n", "collision_mean_n", "ratio"),
     ("friction_mean_n", "friction_mean_n", "ratio"),
-    ("iou_points", "iou", "points"),
-    ("cloth_error_mm", "cloth_error_mm", "ratio"),
-    ("chamfer_mm", "chamfer_mm", "ratio"),
+    ("iou_points", "amv_iou", "points"),
+    ("cloth_error_mm", "cloth_error_mean_mm", "ratio"),
+    ("chamfer_mm", "cloth_chamfer_mm", "ratio"),
 ]
 
 

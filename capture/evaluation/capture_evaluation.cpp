@@ -182,12 +182,11 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     return it->second;
   };
 
-  std::vector<float> cloth_distances, body_distances;  // pooled over frames, for the 95th percentiles
-  MeasuredMean pivot_err, cloth_err, body_err, mpjpe, amv, rv, sv, mpjpe_rr, chamfer;
+  std::vector<double> cloth_distances, body_distances;  // pooled over frames, for the 95th percentiles
+  FrameMetricMeans means;
   std::vector<double> root_rotation_deg;
-  MeasuredMean oob_n, oob_rel, gt_oob_n, gt_oob_rel, oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;
-  double pen_sum = 0, gt_pen_sum = 0;
-  int64_t inside = 0, gt_inside = 0, cloth_vertices = 0;
+  BalancePool balance, gt_balance;
+  FrameMeasures penetration, gt_penetration;  // sums over frames (depth, vertices inside)
   Kept prev2, prev1;
   const int total = int(order.size());
   for (int k = 0; k < total; ++k) {
@@ -198,7 +197,6 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     WEFT_CHECK(f < gt_motion.num_frames(), gt_motion_path, ": no row for frame ", f);
     const PosedCharacter gt_pose = pose_character(ch, gt_motion.dofs.row(f).transpose());
     const Eigen::Vector3d gt_pivot = gt_pose.joints[param.pivot_joint].translation();
-    fe.pivot_error_mm = (cf.pivot - gt_pivot).norm() * mpu * 1e3;
     if (o.gt_translation) fe.shift = gt_pivot - cf.pivot;
     const Eigen::RowVector3d shift = fe.shift.transpose();
 
@@ -207,81 +205,41 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     CapturedMeshes m = read_captured_meshes(cap, f, ch);
     now.body = m.body.rowwise() + shift;
     if (e.has_cloth) now.cloth = m.cloth.rowwise() + shift;
-    const PosedCharacter pred_pose = pose_character(ch, dofs.row(order[k]).transpose());
-    const Vertices body25 = pred_pose.body25.rowwise() + shift;
-    {
-      fe.root_rotation_error_deg = rotation_error_deg(pred_pose.joints[param.pivot_joint].linear(),
-                                                      gt_pose.joints[param.pivot_joint].linear());
-      root_rotation_deg.push_back(fe.root_rotation_error_deg);
-      const Eigen::RowVector3d pred_root = pred_pose.joints[param.pivot_joint].translation().transpose(),
-                               gt_root = gt_pivot.transpose();
-      fe.mpjpe_root_relative_mm = mean_joint_error_mm(pred_pose.body25.rowwise() - pred_root,
-                                                      gt_pose.body25.rowwise() - gt_root, mpu);
-      mpjpe_rr.add(fe.mpjpe_root_relative_mm);
-    }
     now.gt_body = read_gt_mesh(info, "body", f, int(ch.body.mesh.V.rows()), ch);
     if (e.has_cloth) now.gt_cloth = read_gt_mesh(info, "cloth", f, int(ch.cloth->mesh.V.rows()), ch);
 
-    // 3D error.
-    const std::vector<double> bd = vertex_distances_mm(now.body, now.gt_body, mpu);
-    fe.body_error_mean_mm = std::accumulate(bd.begin(), bd.end(), 0.0) / bd.size();
-    fe.body_error_p95_mm = quantile(bd, 0.95);
-    body_distances.insert(body_distances.end(), bd.begin(), bd.end());
-    fe.mpjpe_mm = mean_joint_error_mm(body25, gt_pose.body25, mpu);
-    pivot_err.add(fe.pivot_error_mm), body_err.add(fe.body_error_mean_mm), mpjpe.add(fe.mpjpe_mm);
+    // Pose, 3D error and penetration. The pivot error is the prediction's before any shift;
+    // the joints are the shifted ones, and root-relative they are the same either way. A
+    // frame whose simulation failed has no trustworthy cloth to compare with: its cloth
+    // error is not measured (the rest of the frame is).
+    const PosedCharacter pred_pose = pose_character(ch, dofs.row(order[k]).transpose());
+    PosedFrame predicted, truth;
+    predicted.body = now.body, predicted.cloth = now.cloth;
+    predicted.body25 = pred_pose.body25.rowwise() + shift;
+    predicted.pivot = pred_pose.joints[param.pivot_joint].translation() + fe.shift;
+    predicted.root_rotation = pred_pose.joints[param.pivot_joint].linear();
+    truth.body = now.gt_body, truth.cloth = now.gt_cloth, truth.body25 = gt_pose.body25, truth.pivot = gt_pivot;
+    truth.root_rotation = gt_pose.joints[param.pivot_joint].linear();
+    FrameMeasures& fm = fe.measures;
+    measure_geometry(ch, predicted, truth, !std::binary_search(failed.begin(), failed.end(), f), fm);
+    fm.pivot_error_mm = (cf.pivot - gt_pivot).norm() * mpu * 1e3;
+    root_rotation_deg.push_back(fm.root_rotation_error_deg);
+    body_distances.insert(body_distances.end(), fm.body_distances_mm.begin(), fm.body_distances_mm.end());
+    cloth_distances.insert(cloth_distances.end(), fm.cloth_distances_mm.begin(), fm.cloth_distances_mm.end());
+    fm.body_distances_mm.clear(), fm.cloth_distances_mm.clear();  // pooled: not kept per frame
     if (e.has_cloth) {
-      // A frame whose simulation failed has no trustworthy cloth to compare with: its cloth
-      // error is not measured (the rest of the frame is).
-      if (!std::binary_search(failed.begin(), failed.end(), f)) {
-        const std::vector<double> cd = vertex_distances_mm(now.cloth, now.gt_cloth, mpu);
-        fe.cloth_error_mean_mm = std::accumulate(cd.begin(), cd.end(), 0.0) / cd.size();
-        fe.cloth_error_p95_mm = quantile(cd, 0.95);
-        cloth_distances.insert(cloth_distances.end(), cd.begin(), cd.end());
-        cloth_err.add(fe.cloth_error_mean_mm);
-        fe.cloth_chamfer_mm = chamfer_distance_mm(now.cloth, now.gt_cloth, ch.cloth->mesh.F, mpu);
-        chamfer.add(fe.cloth_chamfer_mm);
+      measure_penetration(ch, now.gt_body, now.gt_cloth, fe.ground_truth);
+      for (auto [sum, frame] : {std::pair{&penetration, &fm}, std::pair{&gt_penetration, &fe.ground_truth}}) {
+        sum->penetration_depth_sum_mm += frame->penetration_depth_sum_mm;
+        sum->penetrating_vertices += frame->penetrating_vertices, sum->cloth_vertices += frame->cloth_vertices;
+        sum->penetration_max_mm = nan_max(sum->penetration_max_mm, frame->penetration_max_mm);
       }
-
-      // Penetration, of the prediction and of the ground truth.
-      const Penetration p = cloth_penetration(ch, now.body, now.cloth);
-      const Penetration g = cloth_penetration(ch, now.gt_body, now.gt_cloth);
-      fe.cloth_vertices = int(now.cloth.rows());
-      fe.penetrating_vertices = p.vertices_inside, fe.penetration_depth_sum_mm = p.depth_sum * 1e3;
-      fe.penetration_mean_mm = p.vertices_inside ? p.depth_sum * 1e3 / p.vertices_inside : 0.0;
-      fe.penetration_max_mm = p.max_depth * 1e3;
-      fe.gt_penetrating_vertices = g.vertices_inside, fe.gt_penetration_depth_sum_mm = g.depth_sum * 1e3;
-      fe.gt_penetration_mean_mm = g.vertices_inside ? g.depth_sum * 1e3 / g.vertices_inside : 0.0;
-      fe.gt_penetration_max_mm = g.max_depth * 1e3;
-      pen_sum += fe.penetration_depth_sum_mm, inside += p.vertices_inside;
-      gt_pen_sum += fe.gt_penetration_depth_sum_mm, gt_inside += g.vertices_inside;
-      cloth_vertices += fe.cloth_vertices;
-      e.penetration_max_mm = nan_max(e.penetration_max_mm, fe.penetration_max_mm);
-      e.gt_penetration_max_mm = nan_max(e.gt_penetration_max_mm, fe.gt_penetration_max_mm);
-
-      // Out-of-balance force over frames f − 2, f − 1, f of one clip.
+      // Out-of-balance force over frames f − 2, f − 1, f of one clip, of both.
       if (with_oob && f >= 2 && prev2.id == f - 2 && prev1.id == f - 1 && same_segment(info, f - 2, f)) {
-        const ClothBalance r = cloth_out_of_balance(ch, simulation, e.fps, prev1.body, now.body, prev2.cloth,
-                                                    prev1.cloth, now.cloth);
-        const ClothBalance t = cloth_out_of_balance(ch, simulation, e.fps, prev1.gt_body, now.gt_body,
-                                                    prev2.gt_cloth, prev1.gt_cloth, now.gt_cloth);
-        fe.oob_mean_n = r.free.oob_force_mean, fe.oob_max_n = r.free.oob_force_max;
-        fe.oob_mean_rel = r.free.oob_force_mean_rel, fe.oob_max_rel = r.free.oob_force_max_rel;
-        fe.oob_all_mean_n = r.all.oob_force_mean, fe.oob_all_max_n = r.all.oob_force_max;
-        fe.gt_oob_mean_n = t.free.oob_force_mean, fe.gt_oob_max_n = t.free.oob_force_max;
-        fe.gt_oob_mean_rel = t.free.oob_force_mean_rel, fe.gt_oob_max_rel = t.free.oob_force_max_rel;
-        ++e.oob_frames, ++e.gt_oob_frames;
-        const auto add = [](MeasuredMean& mean, MetricSummary& s, double frame_mean, double frame_max) {
-          mean.add(frame_mean);
-          s.max = nan_max(s.max, frame_max);
-        };
-        add(oob_n, e.oob_n, r.free.oob_force_mean, r.free.oob_force_max);
-        add(oob_rel, e.oob_rel, r.free.oob_force_mean_rel, r.free.oob_force_max_rel);
-        add(gt_oob_n, e.gt_oob_n, t.free.oob_force_mean, t.free.oob_force_max);
-        add(gt_oob_rel, e.gt_oob_rel, t.free.oob_force_mean_rel, t.free.oob_force_max_rel);
-        add(oob_all_n, e.oob_all_n, r.all.oob_force_mean, r.all.oob_force_max);
-        add(oob_all_rel, e.oob_all_rel, r.all.oob_force_mean_rel, r.all.oob_force_max_rel);
-        add(gt_oob_all_n, e.gt_oob_all_n, t.all.oob_force_mean, t.all.oob_force_max);
-        add(gt_oob_all_rel, e.gt_oob_all_rel, t.all.oob_force_mean_rel, t.all.oob_force_max_rel);
+        measure_balance(ch, simulation, e.fps, prev1.body, now.body, prev2.cloth, prev1.cloth, now.cloth, fm,
+                        &balance);
+        measure_balance(ch, simulation, e.fps, prev1.gt_body, now.gt_body, prev2.gt_cloth, prev1.gt_cloth,
+                        now.gt_cloth, fe.ground_truth, &gt_balance);
       }
     }
 
@@ -294,21 +252,17 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
         masks.push_back(read_dataset_mask(info, f, v));
       }
       fe.iou = silhouette_ious(ch, now.body, e.has_cloth ? &now.cloth : nullptr, cams, masks);
-      MeasuredMean all, rest;
-      for (size_t v = 0; v < fe.iou.size(); ++v) {
-        all.add(fe.iou[v]);
-        if (int(v) != input_view) rest.add(fe.iou[v]);
-      }
-      fe.amv_iou = all.value(), fe.rv_iou = rest.value(), fe.sv_iou = fe.iou[input_view];
-      amv.add(fe.amv_iou), rv.add(fe.rv_iou), sv.add(fe.sv_iou);
+      measure_ious(fe.iou, input_view, fm);
       ++e.iou_frames;
     }
 
+    means.add(fm);
     e.frames.push_back(std::move(fe));
     prev2 = std::move(prev1);
     prev1 = std::move(now);
     if (progress) progress(k + 1, total);
   }
+  e.oob_frames = balance.frames, e.gt_oob_frames = gt_balance.frames;
   if (with_oob && e.oob_frames == 0) {
     e.notes.push_back("out-of-balance force not measured: no three consecutive captured frames of one clip");
     spdlog::warn("{}", e.notes.back());
@@ -316,35 +270,42 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
   if (info.views.size() == 1)
     e.notes.push_back("the dataset has one view: RVIoU (all but the input view) is undefined");
 
-  e.pivot_error_mm = pivot_err.value();
-  e.body_error_mean_mm = body_err.value();
-  e.body_error_p95_mm = quantile(std::vector<double>(body_distances.begin(), body_distances.end()), 0.95);
-  e.mpjpe_mm = mpjpe.value();
-  e.mpjpe_root_relative_mm = mpjpe_rr.value();
+  e.pivot_error_mm = means.mean("pivot_error_mm");
+  e.body_error_mean_mm = means.mean("body_error_mean_mm");
+  e.body_error_p95_mm = quantile(body_distances, 0.95);
+  e.mpjpe_mm = means.mean("mpjpe_mm");
+  e.mpjpe_root_relative_mm = means.mean("mpjpe_root_relative_mm");
   const RotationErrorSummary rotation = summarize_rotation_errors(root_rotation_deg);
   e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
   e.root_rotation_above_45 = rotation.above_45;
   if (e.has_cloth) {
-    e.cloth_chamfer_mm = chamfer.value();
-    e.cloth_error_mean_mm = cloth_err.value();
-    e.cloth_error_p95_mm = quantile(std::vector<double>(cloth_distances.begin(), cloth_distances.end()), 0.95);
-    e.penetration_mean_mm = inside ? pen_sum / inside : 0.0;
-    e.gt_penetration_mean_mm = gt_inside ? gt_pen_sum / gt_inside : 0.0;
-    e.penetrating_fraction = double(inside) / cloth_vertices;
-    e.gt_penetrating_fraction = double(gt_inside) / cloth_vertices;
+    e.cloth_chamfer_mm = means.mean("cloth_chamfer_mm");
+    e.cloth_error_mean_mm = means.mean("cloth_error_mean_mm");
+    e.cloth_error_p95_mm = quantile(cloth_distances, 0.95);
+    const auto mean_inside = [](const FrameMeasures& s) {
+      return s.penetrating_vertices ? s.penetration_depth_sum_mm / double(s.penetrating_vertices) : 0.0;
+    };
+    e.penetration_mean_mm = mean_inside(penetration), e.gt_penetration_mean_mm = mean_inside(gt_penetration);
+    e.penetration_max_mm = penetration.penetration_max_mm, e.gt_penetration_max_mm = gt_penetration.penetration_max_mm;
+    e.penetration_mean_all_mm = penetration.penetration_depth_sum_mm / double(penetration.cloth_vertices);
+    e.penetrating_fraction = double(penetration.penetrating_vertices) / double(penetration.cloth_vertices);
+    e.gt_penetrating_fraction = double(gt_penetration.penetrating_vertices) / double(gt_penetration.cloth_vertices);
   }
-  e.oob_n.mean = oob_n.value(), e.oob_rel.mean = oob_rel.value();
-  e.gt_oob_n.mean = gt_oob_n.value(), e.gt_oob_rel.mean = gt_oob_rel.value();
-  e.oob_all_n.mean = oob_all_n.value(), e.oob_all_rel.mean = oob_all_rel.value();
-  e.gt_oob_all_n.mean = gt_oob_all_n.value(), e.gt_oob_all_rel.mean = gt_oob_all_rel.value();
-  e.amv_iou = amv.value(), e.rv_iou = rv.value(), e.sv_iou = sv.value();
+  e.oob_n = distribution(balance.n), e.oob_rel = distribution(balance.rel);
+  e.gt_oob_n = distribution(gt_balance.n), e.gt_oob_rel = distribution(gt_balance.rel);
+  e.oob_all_n = distribution(balance.all_n), e.oob_all_rel = distribution(balance.all_rel);
+  e.gt_oob_all_n = distribution(gt_balance.all_n), e.gt_oob_all_rel = distribution(gt_balance.all_rel);
+  e.oob_outside_n = distribution(balance.outside_n);
+  e.inertia_mean_n = balance.inertia.value(), e.elastic_mean_n = balance.elastic.value(),
+  e.collision_mean_n = balance.collision.value(), e.friction_mean_n = balance.friction.value();
+  e.amv_iou = means.mean("amv_iou"), e.rv_iou = means.mean("rv_iou"), e.sv_iou = means.mean("sv_iou");
 
   // Overlays of the worst and the median frame: by cloth error, else by the input view's IoU.
   std::vector<int> ranked;
   for (int k = 0; k < total; ++k)
-    if (e.has_cloth ? std::isfinite(e.frames[k].cloth_error_mean_mm) : std::isfinite(e.frames[k].sv_iou))
+    if (e.has_cloth ? std::isfinite(e.frames[k].measures.cloth_error_mean_mm) : std::isfinite(e.frames[k].measures.sv_iou))
       ranked.push_back(k);
-  const auto score = [&](int k) { return e.has_cloth ? e.frames[k].cloth_error_mean_mm : -e.frames[k].sv_iou; };
+  const auto score = [&](int k) { return e.has_cloth ? e.frames[k].measures.cloth_error_mean_mm : -e.frames[k].measures.sv_iou; };
   std::stable_sort(ranked.begin(), ranked.end(), [&](int a, int b) { return score(a) > score(b); });
   std::vector<std::pair<std::string, int>> picks;
   if (!ranked.empty()) picks.push_back({"worst", ranked.front()});
@@ -372,8 +333,8 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     EvaluationOverlay ov;
     ov.label = label;
     ov.id = f;
-    ov.ranked_by = e.has_cloth ? fmt::format("cloth error {:.1f} mm", e.frames[k].cloth_error_mean_mm)
-                               : fmt::format("SVIoU {:.4f}", e.frames[k].sv_iou);
+    ov.ranked_by = e.has_cloth ? fmt::format("cloth error {:.1f} mm", e.frames[k].measures.cloth_error_mean_mm)
+                               : fmt::format("SVIoU {:.4f}", e.frames[k].measures.sv_iou);
     cv::hconcat(left, right, ov.image);
     e.overlays.push_back(std::move(ov));
   }

@@ -47,30 +47,9 @@ struct EvaluationOptions {
 struct FrameEvaluation {
   int id = 0;
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();  // applied to the prediction (character units)
-  double pivot_error_mm = kNotMeasured;             // before the shift
-  double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured;
-  double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
-  double mpjpe_mm = kNotMeasured;
-  double mpjpe_root_relative_mm = kNotMeasured;  // both skeletons' pivots at the origin
-  double root_rotation_error_deg = kNotMeasured;  // the pivot joint's global rotation, geodesic angle
-  double cloth_chamfer_mm = kNotMeasured;         // symmetric surface distance (frame_measures.h)
-  // Penetration: mean over the vertices inside (0 when none is), max, and how many.
-  double penetration_mean_mm = kNotMeasured, penetration_max_mm = kNotMeasured;
-  double penetration_depth_sum_mm = 0;
-  int penetrating_vertices = 0, cloth_vertices = 0;
-  double gt_penetration_mean_mm = kNotMeasured, gt_penetration_max_mm = kNotMeasured;
-  double gt_penetration_depth_sum_mm = 0;
-  int gt_penetrating_vertices = 0;
-  // Out-of-balance force (frames id − 2, id − 1, id predicted and in one clip) over the
-  // vertices the attachment does not hold (frame_measures.h), and over all vertices.
-  double oob_all_mean_n = kNotMeasured, oob_all_max_n = kNotMeasured;
-  double oob_mean_n = kNotMeasured, oob_max_n = kNotMeasured, oob_mean_rel = kNotMeasured,
-         oob_max_rel = kNotMeasured;
-  double gt_oob_mean_n = kNotMeasured, gt_oob_max_n = kNotMeasured, gt_oob_mean_rel = kNotMeasured,
-         gt_oob_max_rel = kNotMeasured;
-  // IoU per dataset view (empty: not an IoU frame), and the three means.
-  std::vector<double> iou;
-  double amv_iou = kNotMeasured, rv_iou = kNotMeasured, sv_iou = kNotMeasured;
+  FrameMeasures measures;      // the prediction against the ground truth (pivot error: before the shift)
+  FrameMeasures ground_truth;  // the ground truth's own penetration and out-of-balance force
+  std::vector<double> iou;     // IoU per dataset view (empty: not an IoU frame)
 };
 
 // A side-by-side image: the input view with the prediction drawn on it (left) and the
@@ -80,10 +59,6 @@ struct EvaluationOverlay {
   int id = 0;
   std::string ranked_by;  // the metric that chose the frame and its value, for captions
   cv::Mat image;          // CV_8UC3 BGR
-};
-
-struct MetricSummary {
-  double mean = kNotMeasured, max = kNotMeasured;
 };
 
 struct CaptureEvaluation {
@@ -100,10 +75,14 @@ struct CaptureEvaluation {
 
   // Summary (NaN where not measured).
   int oob_frames = 0, gt_oob_frames = 0;
-  MetricSummary oob_n, oob_rel, gt_oob_n, gt_oob_rel;  // mean over vertices and frames, max
-  MetricSummary oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;  // the same, anchors included
-  double penetration_mean_mm = kNotMeasured, penetration_max_mm = kNotMeasured,
-         penetrating_fraction = kNotMeasured;
+  // Pooled over the free vertices of every measured frame: mean, p95, p99, max.
+  Distribution oob_n, oob_rel, gt_oob_n, gt_oob_rel;
+  Distribution oob_all_n, oob_all_rel, gt_oob_all_n, gt_oob_all_rel;  // the same, anchors included
+  Distribution oob_outside_n;  // over the free vertices outside the body
+  double inertia_mean_n = kNotMeasured, elastic_mean_n = kNotMeasured, collision_mean_n = kNotMeasured,
+         friction_mean_n = kNotMeasured;  // the terms the residual balances, mean over free vertices
+  double penetration_mean_mm = kNotMeasured, penetration_mean_all_mm = kNotMeasured,
+         penetration_max_mm = kNotMeasured, penetrating_fraction = kNotMeasured;
   double gt_penetration_mean_mm = kNotMeasured, gt_penetration_max_mm = kNotMeasured,
          gt_penetrating_fraction = kNotMeasured;
   int iou_frames = 0;

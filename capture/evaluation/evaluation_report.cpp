@@ -29,6 +29,13 @@ std::vector<double> column(const CaptureEvaluation& e, Get get) {
   for (const FrameEvaluation& f : e.frames) v.push_back(get(f));
   return v;
 }
+std::vector<double> column(const CaptureEvaluation& e, double FrameMeasures::*metric) {
+  return column(e, [&](const FrameEvaluation& f) { return f.measures.*metric; });
+}
+
+json distribution_json(const Distribution& d) {
+  return {{"mean", d.mean}, {"p95", d.p95}, {"p99", d.p99}, {"max", d.max}, {"count", d.count}};
+}
 
 std::string escape(const std::string& s) {
   std::string out;
@@ -76,25 +83,25 @@ std::string CaptureEvaluation::to_json() const {
   j["notes"] = notes;
   json& s = j["summary"];
   s["frames"] = frames.size();
-  s["out_of_balance_force"] = {{"frames", oob_frames},      {"mean_n", oob_n.mean},     {"max_n", oob_n.max},
-                               {"mean_rel", oob_rel.mean}, {"max_rel", oob_rel.max},
-                               {"ground_truth",
-                                {{"frames", gt_oob_frames},
-                                 {"mean_n", gt_oob_n.mean},
-                                 {"max_n", gt_oob_n.max},
-                                 {"mean_rel", gt_oob_rel.mean},
-                                 {"max_rel", gt_oob_rel.max}}}};
-  s["out_of_balance_force_all_vertices"] = {{"mean_n", oob_all_n.mean},
-                                            {"max_n", oob_all_n.max},
-                                            {"mean_rel", oob_all_rel.mean},
-                                            {"max_rel", oob_all_rel.max},
-                                            {"ground_truth",
-                                             {{"mean_n", gt_oob_all_n.mean},
-                                              {"max_n", gt_oob_all_n.max},
-                                              {"mean_rel", gt_oob_all_rel.mean},
-                                              {"max_rel", gt_oob_all_rel.max}}}};
+  // The means and maxima (the paper's figures) first, then the distribution pooled over vertices.
+  const auto oob = [](const Distribution& n, const Distribution& rel) {
+    return json{{"mean_n", n.mean}, {"max_n", n.max}, {"mean_rel", rel.mean}, {"max_rel", rel.max},
+                {"p95_n", n.p95}, {"p99_n", n.p99}, {"vertices", n.count}};
+  };
+  s["out_of_balance_force"] = oob(oob_n, oob_rel);
+  s["out_of_balance_force"]["frames"] = oob_frames;
+  s["out_of_balance_force"]["outside_body_n"] = distribution_json(oob_outside_n);
+  s["out_of_balance_force"]["terms_mean_n"] = {{"inertia", inertia_mean_n},
+                                               {"elastic", elastic_mean_n},
+                                               {"collision", collision_mean_n},
+                                               {"friction", friction_mean_n}};
+  s["out_of_balance_force"]["ground_truth"] = oob(gt_oob_n, gt_oob_rel);
+  s["out_of_balance_force"]["ground_truth"]["frames"] = gt_oob_frames;
+  s["out_of_balance_force_all_vertices"] = oob(oob_all_n, oob_all_rel);
+  s["out_of_balance_force_all_vertices"]["ground_truth"] = oob(gt_oob_all_n, gt_oob_all_rel);
   s["penetration"] = {{"mean_cm", penetration_mean_mm / 10},
                       {"mean_mm", penetration_mean_mm},
+                      {"mean_all_mm", penetration_mean_all_mm},
                       {"max_mm", penetration_max_mm},
                       {"fraction_inside", penetrating_fraction},
                       {"ground_truth",
@@ -122,31 +129,12 @@ std::string CaptureEvaluation::to_json() const {
   }
   p["id"] = ids;
   p["shift"] = shifts;
-  p["pivot_error_mm"] = column(*this, [](const auto& f) { return f.pivot_error_mm; });
-  p["cloth_error_mean_mm"] = column(*this, [](const auto& f) { return f.cloth_error_mean_mm; });
-  p["cloth_error_p95_mm"] = column(*this, [](const auto& f) { return f.cloth_error_p95_mm; });
-  p["body_error_mean_mm"] = column(*this, [](const auto& f) { return f.body_error_mean_mm; });
-  p["body_error_p95_mm"] = column(*this, [](const auto& f) { return f.body_error_p95_mm; });
-  p["mpjpe_mm"] = column(*this, [](const auto& f) { return f.mpjpe_mm; });
-  p["mpjpe_root_relative_mm"] = column(*this, [](const auto& f) { return f.mpjpe_root_relative_mm; });
-  p["root_rotation_error_deg"] = column(*this, [](const auto& f) { return f.root_rotation_error_deg; });
-  p["cloth_chamfer_mm"] = column(*this, [](const auto& f) { return f.cloth_chamfer_mm; });
-  p["penetration_mean_mm"] = column(*this, [](const auto& f) { return f.penetration_mean_mm; });
-  p["penetration_max_mm"] = column(*this, [](const auto& f) { return f.penetration_max_mm; });
-  p["penetrating_vertices"] = column(*this, [](const auto& f) { return double(f.penetrating_vertices); });
-  p["gt_penetration_mean_mm"] = column(*this, [](const auto& f) { return f.gt_penetration_mean_mm; });
-  p["gt_penetration_max_mm"] = column(*this, [](const auto& f) { return f.gt_penetration_max_mm; });
-  p["oob_force_mean_n"] = column(*this, [](const auto& f) { return f.oob_mean_n; });
-  p["oob_force_max_n"] = column(*this, [](const auto& f) { return f.oob_max_n; });
-  p["oob_force_mean_rel"] = column(*this, [](const auto& f) { return f.oob_mean_rel; });
-  p["oob_force_max_rel"] = column(*this, [](const auto& f) { return f.oob_max_rel; });
-  p["oob_force_all_vertices_mean_n"] = column(*this, [](const auto& f) { return f.oob_all_mean_n; });
-  p["oob_force_all_vertices_max_n"] = column(*this, [](const auto& f) { return f.oob_all_max_n; });
-  p["gt_oob_force_mean_n"] = column(*this, [](const auto& f) { return f.gt_oob_mean_n; });
-  p["gt_oob_force_max_n"] = column(*this, [](const auto& f) { return f.gt_oob_max_n; });
-  p["amv_iou"] = column(*this, [](const auto& f) { return f.amv_iou; });
-  p["rv_iou"] = column(*this, [](const auto& f) { return f.rv_iou; });
-  p["sv_iou"] = column(*this, [](const auto& f) { return f.sv_iou; });
+  for (const FrameMetric& m : frame_metrics()) p[m.name] = column(*this, m.value);
+  p["penetrating_vertices"] = column(*this, [](const auto& f) { return double(f.measures.penetrating_vertices); });
+  p["gt_penetration_mean_mm"] = column(*this, [](const auto& f) { return f.ground_truth.penetration_mean_mm; });
+  p["gt_penetration_max_mm"] = column(*this, [](const auto& f) { return f.ground_truth.penetration_max_mm; });
+  p["gt_oob_force_mean_n"] = column(*this, [](const auto& f) { return f.ground_truth.oob_force_mean_n; });
+  p["gt_oob_force_max_n"] = column(*this, [](const auto& f) { return f.ground_truth.oob_force_max_n; });
   p["iou_per_view"] = ious;
   json ov = json::array();
   for (const EvaluationOverlay& o : overlays)
@@ -313,28 +301,28 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
 
   h += "<h2>Per frame</h2>\n";
   h += svg_line_plot("3D vertex error", "mm",
-                     ids, {{"cloth mean", col([](const auto& f) { return f.cloth_error_mean_mm; }), "#d62728"},
-                           {"cloth p95", col([](const auto& f) { return f.cloth_error_p95_mm; }), "#ff9896"},
-                           {"body mean", col([](const auto& f) { return f.body_error_mean_mm; }), "#1f77b4"},
-                           {"body p95", col([](const auto& f) { return f.body_error_p95_mm; }), "#aec7e8"}});
+                     ids, {{"cloth mean", col([](const auto& f) { return f.measures.cloth_error_mean_mm; }), "#d62728"},
+                           {"cloth p95", col([](const auto& f) { return f.measures.cloth_error_p95_mm; }), "#ff9896"},
+                           {"body mean", col([](const auto& f) { return f.measures.body_error_mean_mm; }), "#1f77b4"},
+                           {"body p95", col([](const auto& f) { return f.measures.body_error_p95_mm; }), "#aec7e8"}});
   h += svg_line_plot("Joint and global translation error", "mm", ids,
-                     {{"MPJPE", col([](const auto& f) { return f.mpjpe_mm; }), "#2ca02c"},
-                      {"pivot", col([](const auto& f) { return f.pivot_error_mm; }), "#9467bd"}});
+                     {{"MPJPE", col([](const auto& f) { return f.measures.mpjpe_mm; }), "#2ca02c"},
+                      {"pivot", col([](const auto& f) { return f.measures.pivot_error_mm; }), "#9467bd"}});
   h += svg_line_plot("Penetration depth", "mm", ids,
-                     {{"mean", col([](const auto& f) { return f.penetration_mean_mm; }), "#d62728"},
-                      {"max", col([](const auto& f) { return f.penetration_max_mm; }), "#ff7f0e"},
-                      {"ground truth max", col([](const auto& f) { return f.gt_penetration_max_mm; }), "#7f7f7f"}});
+                     {{"mean", col([](const auto& f) { return f.measures.penetration_mean_mm; }), "#d62728"},
+                      {"max", col([](const auto& f) { return f.measures.penetration_max_mm; }), "#ff7f0e"},
+                      {"ground truth max", col([](const auto& f) { return f.ground_truth.penetration_max_mm; }), "#7f7f7f"}});
   h += svg_line_plot("Out-of-balance force", "N", ids,
-                     {{"mean", col([](const auto& f) { return f.oob_mean_n; }), "#1f77b4"},
-                      {"max", col([](const auto& f) { return f.oob_max_n; }), "#ff7f0e"},
-                      {"ground truth max", col([](const auto& f) { return f.gt_oob_max_n; }), "#7f7f7f"}});
+                     {{"mean", col([](const auto& f) { return f.measures.oob_force_mean_n; }), "#1f77b4"},
+                      {"max", col([](const auto& f) { return f.measures.oob_force_max_n; }), "#ff7f0e"},
+                      {"ground truth max", col([](const auto& f) { return f.ground_truth.oob_force_max_n; }), "#7f7f7f"}});
   h += svg_line_plot("Out-of-balance force relative to a vertex's weight", "× m g", ids,
-                     {{"mean", col([](const auto& f) { return f.oob_mean_rel; }), "#1f77b4"},
-                      {"max", col([](const auto& f) { return f.oob_max_rel; }), "#ff7f0e"}});
+                     {{"mean", col([](const auto& f) { return f.measures.oob_force_mean_rel; }), "#1f77b4"},
+                      {"max", col([](const auto& f) { return f.measures.oob_force_max_rel; }), "#ff7f0e"}});
   h += svg_line_plot("Silhouette IoU", "IoU", ids,
-                     {{"AMV", col([](const auto& f) { return f.amv_iou; }), "#2ca02c", true},
-                      {"RV", col([](const auto& f) { return f.rv_iou; }), "#17becf", true},
-                      {"SV", col([](const auto& f) { return f.sv_iou; }), "#bcbd22", true}});
+                     {{"AMV", col([](const auto& f) { return f.measures.amv_iou; }), "#2ca02c", true},
+                      {"RV", col([](const auto& f) { return f.measures.rv_iou; }), "#17becf", true},
+                      {"SV", col([](const auto& f) { return f.measures.sv_iou; }), "#bcbd22", true}});
 
   h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
        "outline white) beside the ground truth drawn the same way (right).</p>\n";
@@ -349,9 +337,9 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
     h += fmt::format(
         "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
         "<td>{}</td><td>{}</td><td>{}</td></tr>\n",
-        f.id, num(f.cloth_error_mean_mm, 2), num(f.body_error_mean_mm, 2), num(f.mpjpe_mm, 2), num(f.pivot_error_mm, 2),
-        num(f.penetration_mean_mm, 3), num(f.penetration_max_mm, 3), sci(f.oob_mean_n), sci(f.oob_max_n),
-        num(f.amv_iou, 4), num(f.rv_iou, 4), num(f.sv_iou, 4));
+        f.id, num(f.measures.cloth_error_mean_mm, 2), num(f.measures.body_error_mean_mm, 2), num(f.measures.mpjpe_mm, 2), num(f.measures.pivot_error_mm, 2),
+        num(f.measures.penetration_mean_mm, 3), num(f.measures.penetration_max_mm, 3), sci(f.measures.oob_force_mean_n), sci(f.measures.oob_force_max_n),
+        num(f.measures.amv_iou, 4), num(f.measures.rv_iou, 4), num(f.measures.sv_iou, 4));
   h += "</table>\n<p>All numbers: <a href=\"metrics.json\">metrics.json</a>.</p>\n</body></html>\n";
   write_text("report.html", h);
   return written;

@@ -131,4 +131,150 @@ RotationErrorSummary summarize_rotation_errors(const std::vector<double>& errors
   return s;
 }
 
+const std::vector<FrameMetric>& frame_metrics() {
+  using M = FrameMeasures;
+  static const std::vector<FrameMetric> table = {
+      {"pivot_error_mm", "mm", "distance of the pivot joint (the global translation's error)", &M::pivot_error_mm},
+      {"mpjpe_mm", "mm", "mean joint error over the mapped BODY_25 keypoints", &M::mpjpe_mm},
+      {"mpjpe_root_relative_mm", "mm", "the same with both pivots at the origin", &M::mpjpe_root_relative_mm},
+      {"root_rotation_error_deg", "°", "geodesic angle between the pivot joint's global rotations",
+       &M::root_rotation_error_deg},
+      {"body_error_mean_mm", "mm", "mean body vertex distance", &M::body_error_mean_mm},
+      {"body_error_p95_mm", "mm", "95th percentile of the body vertex distances", &M::body_error_p95_mm},
+      {"cloth_error_mean_mm", "mm", "mean cloth vertex distance", &M::cloth_error_mean_mm},
+      {"cloth_error_p95_mm", "mm", "95th percentile of the cloth vertex distances", &M::cloth_error_p95_mm},
+      {"cloth_chamfer_mm", "mm", "symmetric Chamfer distance of the cloth surfaces", &M::cloth_chamfer_mm},
+      {"penetration_mean_mm", "mm", "depth of cloth vertices inside the body, mean over those inside",
+       &M::penetration_mean_mm},
+      {"penetration_mean_all_mm", "mm", "the same depth, mean over every cloth vertex (0 outside)",
+       &M::penetration_mean_all_mm},
+      {"penetration_max_mm", "mm", "the deepest cloth vertex", &M::penetration_max_mm},
+      {"penetrating_fraction", "", "the fraction of cloth vertices inside the body", &M::penetrating_fraction},
+      {"oob_force_mean_n", "N", "out-of-balance force, mean over the free vertices", &M::oob_force_mean_n},
+      {"oob_force_p95_n", "N", "its 95th percentile", &M::oob_force_p95_n},
+      {"oob_force_p99_n", "N", "its 99th percentile", &M::oob_force_p99_n},
+      {"oob_force_max_n", "N", "its maximum", &M::oob_force_max_n},
+      {"oob_force_mean_rel", "× m g", "the same relative to each vertex's weight, mean", &M::oob_force_mean_rel},
+      {"oob_force_max_rel", "× m g", "relative, maximum", &M::oob_force_max_rel},
+      {"oob_force_outside_mean_n", "N", "mean over the free vertices outside the body",
+       &M::oob_force_outside_mean_n},
+      {"oob_force_all_vertices_mean_n", "N", "mean over every vertex, anchors included",
+       &M::oob_force_all_vertices_mean_n},
+      {"oob_force_all_vertices_max_n", "N", "maximum over every vertex", &M::oob_force_all_vertices_max_n},
+      {"inertia_mean_n", "N", "mean size of m a over the free vertices", &M::inertia_mean_n},
+      {"elastic_mean_n", "N", "mean size of the membrane + bending force", &M::elastic_mean_n},
+      {"collision_mean_n", "N", "mean size of the collision penalty force", &M::collision_mean_n},
+      {"friction_mean_n", "N", "mean size of the friction force", &M::friction_mean_n},
+      {"amv_iou", "", "silhouette IoU, mean over all views", &M::amv_iou},
+      {"rv_iou", "", "silhouette IoU, mean over all views but the input view", &M::rv_iou},
+      {"sv_iou", "", "silhouette IoU of the input view", &M::sv_iou},
+  };
+  return table;
+}
+
+FrameMetricMeans::FrameMetricMeans() : means_(frame_metrics().size()) {}
+
+void FrameMetricMeans::add(const FrameMeasures& m) {
+  const std::vector<FrameMetric>& table = frame_metrics();
+  for (size_t k = 0; k < table.size(); ++k) means_[k].add(m.*table[k].value);
+}
+
+double FrameMetricMeans::mean(const std::string& name) const {
+  const std::vector<FrameMetric>& table = frame_metrics();
+  for (size_t k = 0; k < table.size(); ++k)
+    if (name == table[k].name) return means_[k].value();
+  fail("FrameMetricMeans: no metric named '", name, "' (frame_metrics() lists them)");
+}
+
+namespace {
+
+double mean_of(const std::vector<double>& v) {
+  if (v.empty()) return kNotMeasured;
+  double sum = 0;
+  for (double x : v) sum += x;
+  return sum / double(v.size());
+}
+
+}  // namespace
+
+void measure_penetration(const Character& ch, const Vertices& body, const Vertices& cloth, FrameMeasures& m) {
+  const Penetration p = cloth_penetration(ch, body, cloth);
+  m.cloth_vertices = cloth.rows();
+  m.penetrating_vertices = p.vertices_inside;
+  m.penetration_depth_sum_mm = p.depth_sum * 1e3;
+  m.penetration_mean_mm = p.vertices_inside ? p.depth_sum * 1e3 / p.vertices_inside : 0.0;
+  m.penetration_mean_all_mm = cloth.rows() ? p.depth_sum * 1e3 / double(cloth.rows()) : kNotMeasured;
+  m.penetration_max_mm = p.max_depth * 1e3;
+  m.penetrating_fraction = cloth.rows() ? double(p.vertices_inside) / double(cloth.rows()) : kNotMeasured;
+}
+
+void measure_geometry(const Character& ch, const PosedFrame& p, const PosedFrame& t, bool cloth_error,
+                      FrameMeasures& m) {
+  const double mpu = ch.metres_per_unit;
+  m.pivot_error_mm = (p.pivot - t.pivot).norm() * mpu * 1e3;
+  m.mpjpe_mm = mean_joint_error_mm(p.body25, t.body25, mpu);
+  m.mpjpe_root_relative_mm = mean_joint_error_mm(p.body25.rowwise() - p.pivot.transpose(),
+                                                 t.body25.rowwise() - t.pivot.transpose(), mpu);
+  if (p.root_rotation && t.root_rotation) m.root_rotation_error_deg = rotation_error_deg(*p.root_rotation, *t.root_rotation);
+  m.body_distances_mm = vertex_distances_mm(p.body, t.body, mpu);
+  m.body_error_mean_mm = mean_of(m.body_distances_mm);
+  m.body_error_p95_mm = quantile(m.body_distances_mm, 0.95);
+  if (p.cloth.rows() == 0) return;
+  if (cloth_error) {
+    WEFT_CHECK(ch.has_cloth(), "measure_geometry: a predicted cloth for a character without a garment");
+    m.cloth_distances_mm = vertex_distances_mm(p.cloth, t.cloth, mpu);
+    m.cloth_error_mean_mm = mean_of(m.cloth_distances_mm);
+    m.cloth_error_p95_mm = quantile(m.cloth_distances_mm, 0.95);
+    m.cloth_chamfer_mm = chamfer_distance_mm(p.cloth, t.cloth, ch.cloth->mesh.F, mpu);
+  }
+  measure_penetration(ch, p.body, p.cloth, m);
+}
+
+void measure_balance(const Character& ch, const SynthSimulationConfig& simulation, double fps,
+                     const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,
+                     const Vertices& cloth_prev, const Vertices& cloth, FrameMeasures& m, BalancePool* pool) {
+  const ClothBalance cb =
+      cloth_out_of_balance(ch, simulation, fps, body_prev, body, cloth_prev2, cloth_prev, cloth);
+  const std::vector<double> depth = cloth_signed_distances_mm(ch, body, cloth);
+  const physics::VertexBalance& vb = cb.vertices;
+  std::vector<double> n, rel, outside;
+  MeasuredMean inertia, elastic, collision, friction;
+  for (int i : cb.free_vertices) {
+    n.push_back(vb.residual[i]);
+    rel.push_back(vb.weight[i] > 0 ? vb.residual[i] / vb.weight[i] : 0.0);
+    if (depth[i] >= 0) outside.push_back(vb.residual[i]);
+    inertia.add(vb.inertia[i]), elastic.add(vb.elastic[i]), collision.add(vb.collision[i]), friction.add(vb.friction[i]);
+  }
+  const Distribution d = distribution(n), r = distribution(rel);
+  m.oob_force_mean_n = d.mean, m.oob_force_p95_n = d.p95, m.oob_force_p99_n = d.p99, m.oob_force_max_n = d.max;
+  m.oob_force_mean_rel = r.mean, m.oob_force_max_rel = r.max;
+  m.oob_force_outside_mean_n = mean_of(outside);
+  m.oob_force_all_vertices_mean_n = cb.all.oob_force_mean, m.oob_force_all_vertices_max_n = cb.all.oob_force_max;
+  m.inertia_mean_n = inertia.value(), m.elastic_mean_n = elastic.value(), m.collision_mean_n = collision.value(),
+  m.friction_mean_n = friction.value();
+  if (!pool) return;
+  ++pool->frames;
+  pool->n.insert(pool->n.end(), n.begin(), n.end());
+  pool->rel.insert(pool->rel.end(), rel.begin(), rel.end());
+  pool->outside_n.insert(pool->outside_n.end(), outside.begin(), outside.end());
+  for (size_t i = 0; i < vb.residual.size(); ++i) {
+    pool->all_n.push_back(vb.residual[i]);
+    pool->all_rel.push_back(vb.weight[i] > 0 ? vb.residual[i] / vb.weight[i] : 0.0);
+  }
+  for (int i : cb.free_vertices)
+    pool->inertia.add(vb.inertia[i]), pool->elastic.add(vb.elastic[i]), pool->collision.add(vb.collision[i]),
+        pool->friction.add(vb.friction[i]);
+}
+
+void measure_ious(const std::vector<double>& iou, int input_view, FrameMeasures& m) {
+  WEFT_CHECK(input_view >= 0 && input_view < int(iou.size()), "measure_ious: input view ", input_view, " of ",
+             iou.size(), " views");
+  MeasuredMean all, rest;
+  for (size_t v = 0; v < iou.size(); ++v) {
+    all.add(iou[v]);
+    if (int(v) != input_view) rest.add(iou[v]);
+  }
+  m.amv_iou = all.value(), m.rv_iou = rest.value(), m.sv_iou = iou[input_view];
+}
+
 }  // namespace weft::capture

@@ -1,7 +1,12 @@
 #pragma once
-// The paper's per-frame measures of a predicted body and garment (character units in,
-// the units named in each result out), each on plain Eigen meshes so that they apply to
-// any method's output:
+// The per-frame measures of a predicted body and garment (character units in, the units
+// named in each result out), each on plain Eigen meshes so that they apply to any
+// method's output. Both evaluations, `weft eval` (capture_evaluation.h) and `weft train
+// --evaluate` (training/split_evaluation.h), measure a frame with measure_geometry,
+// measure_balance and measure_ious into one FrameMeasures, whose fields frame_metrics()
+// lists by name, unit and meaning: a new metric is a field, its line in that table and
+// its computation here, and tests/capture/frame_metrics_test.cpp fails until it has a
+// known-answer case. The measures:
 // - vertex distance to the ground truth (mm) and the joint error over the mapped BODY_25
 //   keypoints (MPJPE, mm);
 // - penetration of cloth vertices into the body's active faces (those the simulator
@@ -17,6 +22,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "capture/character/character.h"
@@ -103,5 +110,88 @@ ClothBalance cloth_out_of_balance(const Character& character, const SynthSimulat
 // front of. Views render in parallel.
 std::vector<double> silhouette_ious(const Character& character, const Vertices& body, const Vertices* cloth,
                                     const std::vector<Camera>& cameras, const std::vector<cv::Mat>& masks);
+
+// A posed frame, predicted or true (character units).
+struct PosedFrame {
+  Vertices body, cloth;                             // cloth: empty without a garment
+  Vertices body25;                                  // BODY_25 keypoints of the posed skeleton; NaN rows: not measured
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // the pivot joint's position
+  std::optional<Eigen::Matrix3d> root_rotation;     // the pivot joint's global rotation; none: not measured
+};
+
+// Every measure of one predicted frame (NaN: not measured). The fields that are metrics
+// are listed in frame_metrics(); the counts and per-vertex values below them are what
+// pooled figures (a mean over penetrating vertices, a 95th percentile over vertices) need.
+struct FrameMeasures {
+  double pivot_error_mm = kNotMeasured;
+  double mpjpe_mm = kNotMeasured, mpjpe_root_relative_mm = kNotMeasured;
+  double root_rotation_error_deg = kNotMeasured;
+  double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
+  double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured, cloth_chamfer_mm = kNotMeasured;
+  double penetration_mean_mm = kNotMeasured;      // over the cloth vertices inside (0 when none is)
+  double penetration_mean_all_mm = kNotMeasured;  // over every cloth vertex (0 outside)
+  double penetration_max_mm = kNotMeasured, penetrating_fraction = kNotMeasured;
+  // Out-of-balance force over the vertices the attachment does not hold (free), and over all.
+  double oob_force_mean_n = kNotMeasured, oob_force_p95_n = kNotMeasured, oob_force_p99_n = kNotMeasured,
+         oob_force_max_n = kNotMeasured;
+  double oob_force_mean_rel = kNotMeasured, oob_force_max_rel = kNotMeasured;
+  double oob_force_outside_mean_n = kNotMeasured;  // over the free vertices outside the body
+  double oob_force_all_vertices_mean_n = kNotMeasured, oob_force_all_vertices_max_n = kNotMeasured;
+  double inertia_mean_n = kNotMeasured, elastic_mean_n = kNotMeasured, collision_mean_n = kNotMeasured,
+         friction_mean_n = kNotMeasured;
+  double amv_iou = kNotMeasured, rv_iou = kNotMeasured, sv_iou = kNotMeasured;
+
+  int64_t cloth_vertices = 0, penetrating_vertices = 0;
+  double penetration_depth_sum_mm = 0;
+  std::vector<double> body_distances_mm, cloth_distances_mm;  // per vertex (cloth: empty when not measured)
+};
+
+// One per-frame metric: its name (the key in metrics.json and in the split evaluation's
+// rows), unit and meaning, and where FrameMeasures holds it.
+struct FrameMetric {
+  const char* name;
+  const char* unit;
+  const char* meaning;
+  double FrameMeasures::*value;
+};
+// Every per-frame metric, in the order both evaluations write them.
+const std::vector<FrameMetric>& frame_metrics();
+
+// The mean over frames of every metric of frame_metrics() (not measured: left out).
+class FrameMetricMeans {
+ public:
+  FrameMetricMeans();
+  void add(const FrameMeasures& m);
+  // The mean of the metric named `name` (an error names an unknown one).
+  double mean(const std::string& name) const;
+
+ private:
+  std::vector<MeasuredMean> means_;
+};
+
+// Pose and shape of `predicted` against `truth`: pivot and joint errors (rows NaN in
+// either are left out), root rotation (when both have one), body vertex error, and with
+// `cloth_error` the cloth's vertex error and Chamfer distance (false: e.g. a ground truth
+// whose simulation failed); and the predicted cloth's penetration into the predicted body.
+void measure_geometry(const Character& character, const PosedFrame& predicted, const PosedFrame& truth,
+                      bool cloth_error, FrameMeasures& m);
+// Penetration of `cloth` into `body` alone (e.g. of a ground-truth frame).
+void measure_penetration(const Character& character, const Vertices& body, const Vertices& cloth, FrameMeasures& m);
+
+// The out-of-balance force's per-vertex values pooled over frames, for distributions.
+struct BalancePool {
+  int frames = 0;
+  std::vector<double> n, rel, outside_n, all_n, all_rel;  // N, × weight; free vertices unless "all"
+  MeasuredMean inertia, elastic, collision, friction;     // N, over the free vertices
+};
+// The out-of-balance force of frame t given frames t − 2 and t − 1 (cloth_out_of_balance)
+// into m's oob_* and term fields, and its values into `pool` when given.
+void measure_balance(const Character& character, const SynthSimulationConfig& simulation, double fps,
+                     const Vertices& body_prev, const Vertices& body, const Vertices& cloth_prev2,
+                     const Vertices& cloth_prev, const Vertices& cloth, FrameMeasures& m, BalancePool* pool = nullptr);
+
+// AMVIoU (the mean over views), RVIoU (all but the input view; NaN with one view) and
+// SVIoU (the input view) from the IoU of each view.
+void measure_ious(const std::vector<double>& iou_per_view, int input_view, FrameMeasures& m);
 
 }  // namespace weft::capture

@@ -36,11 +36,11 @@ namespace {
 // Mean distance (character units) between corresponding rows.
 double mean_distance(const Vertices& a, const Vertices& b) { return (a - b).rowwise().norm().mean(); }
 
-}  // namespace
-
 nlohmann::json distribution_json(const Distribution& d) {
   return {{"mean", d.mean}, {"p95", d.p95}, {"p99", d.p99}, {"max", d.max}, {"count", d.count}};
 }
+
+}  // namespace
 
 std::string SplitEvaluation::to_json() const {
   nlohmann::ordered_json j;  // NaN (not measured) is written as null
@@ -79,26 +79,11 @@ std::string SplitEvaluation::to_json() const {
                            {"friction", friction_mean_n}};
   j["seconds"] = seconds;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
-  for (const SplitFrameEvaluation& f : per_frame)
-    rows.push_back({{"frame", f.frame},
-                    {"view", f.view},
-                    {"joint_error_mm", f.joint_error_mm},
-                    {"root_rotation_error_deg", f.root_rotation_error_deg},
-                    {"cloth_error_mm", f.cloth_error_mm},
-                    {"chamfer_mm", f.chamfer_mm},
-                    {"body_error_mm", f.body_error_mm},
-                    {"iou", f.iou},
-                    {"penetration_mean_all_mm", f.penetration_mean_all_mm},
-                    {"penetrating_fraction", f.penetrating_fraction},
-                    {"oob_mean_n", f.oob_mean_n},
-                    {"oob_p95_n", f.oob_p95_n},
-                    {"oob_max_n", f.oob_max_n},
-                    {"oob_mean_rel", f.oob_mean_rel},
-                    {"oob_outside_mean_n", f.oob_outside_mean_n},
-                    {"inertia_mean_n", f.inertia_mean_n},
-                    {"elastic_mean_n", f.elastic_mean_n},
-                    {"collision_mean_n", f.collision_mean_n},
-                    {"friction_mean_n", f.friction_mean_n}});
+  for (const SplitFrameEvaluation& f : per_frame) {
+    nlohmann::ordered_json row = {{"frame", f.frame}, {"view", f.view}};
+    for (const FrameMetric& m : frame_metrics()) row[m.name] = f.measures.*m.value;
+    rows.push_back(row);
+  }
   j["per_frame"] = rows;
   return j.dump(2) + "\n";
 }
@@ -182,7 +167,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   // The garment's simulation as the dataset was made (dataset.yaml; none: not measured).
   const std::optional<SynthSimulationConfig> dataset_simulation =
       ch.has_cloth() ? find_dataset_simulation(data) : std::nullopt;
-  const bool measure_balance = dataset_simulation.has_value();
+  const bool with_balance = dataset_simulation.has_value();
   const SynthSimulationConfig simulation = dataset_simulation.value_or(SynthSimulationConfig{});
 
   SplitEvaluation e;
@@ -191,10 +176,11 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.frames = int(frames.size());
   e.views = V;
   std::vector<double> rotation_errors;
-  MeasuredMean rotation_err, kp, joint, joint_aligned, iou, tmpl_iou, cloth_err, chamfer, body_err, pen, pen_all, inside;
-  MeasuredMean inertia, elastic, collision, friction;
-  std::vector<double> oob_values, oob_rel_values, oob_outside_values;
-  double pen_max = 0;
+  FrameMetricMeans means;
+  MeasuredMean kp, iou, tmpl_iou;
+  BalancePool balance;
+  FrameMeasures penetration;  // sums over predictions (depth, vertices inside), and the max
+  penetration.penetration_max_mm = 0;
   for (int v = 0; v < V; ++v) {
     std::map<int, Vertices> cloth_seq, body_seq;
     std::map<int, size_t> row_of;  // frame → its row of e.per_frame for this view
@@ -231,128 +217,101 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         SplitFrameEvaluation fe;
         fe.frame = f;
         fe.view = v;
-        const Vertices K = sample_vertices(p.keypoints, b);
-        const Eigen::RowVector3d t_pred(p.translation.data<float>()[3 * b], p.translation.data<float>()[3 * b + 1],
-                                        p.translation.data<float>()[3 * b + 2]);
-        const Vertices& G = gt_keypoints[f];
-        if (!cfg.oracle_pose) {
+        // The prediction and its ground truth; the keypoints the model does not fit are
+        // not measured. The predicted pivot is the predicted translation (the truth's with
+        // the oracle pose, whose root rotation is then not measured).
+        PosedFrame predicted, truth;
+        predicted.body = sample_vertices(p.body, b);
+        if (p.cloth.defined()) predicted.cloth = sample_vertices(p.cloth, b);
+        predicted.body25 = sample_vertices(p.keypoints, b);
+        for (int m = 0; m < kBody25Count; ++m)
+          if (model.keypoint_mask()[m] <= 0) predicted.body25.row(m).setConstant(kNotMeasured);
+        truth.body = gt_body[f], truth.body25 = gt_keypoints[f], truth.pivot = gt_pivot[f];
+        if (ch.has_cloth()) truth.cloth = gt_cloth[f];
+        if (cfg.oracle_pose) {
+          predicted.pivot = gt_pivot[f];
+        } else {
+          for (int a = 0; a < 3; ++a) predicted.pivot[a] = p.translation.data<float>()[3 * b + a];
           Eigen::Matrix3d R_pred;
           for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) R_pred(r, c) = p.rotation.data<float>()[9 * b + 3 * r + c];
-          fe.root_rotation_error_deg = rotation_error_deg(R_pred, gt_rotation[f]);
-          rotation_err.add(fe.root_rotation_error_deg);
-          rotation_errors.push_back(fe.root_rotation_error_deg);
+          predicted.root_rotation = R_pred;
+          truth.root_rotation = gt_rotation[f];
         }
-        MeasuredMean frame_joint;
-        for (int m = 0; m < kBody25Count; ++m) {
-          if (model.keypoint_mask()[m] <= 0 || !G.row(m).allFinite()) continue;
-          joint.add((K.row(m) - G.row(m)).norm() * mpu * 1e3);
-          frame_joint.add((K.row(m) - G.row(m)).norm() * mpu * 1e3);
-          // Root-relative (the pivot joint at the origin, rotations kept): how the root
-          // rotation and the articulation split a pose is not unique (hips and spine can
-          // turn the body too), the posed skeleton is.
-          const Eigen::Vector3d g_rel = G.row(m).transpose() - gt_pivot[f];
-          const Eigen::RowVector3d pivot = cfg.oracle_pose ? Eigen::RowVector3d(gt_pivot[f].transpose()) : t_pred;
-          joint_aligned.add(((K.row(m) - pivot).transpose() - g_rel).norm() * mpu * 1e3);
-        }
-        fe.joint_error_mm = frame_joint.value();
-        const Vertices body = sample_vertices(p.body, b), body_t = sample_vertices(t.body, b);
-        fe.body_error_mm = mean_distance(body, gt_body[f]) * mpu * 1e3;
-        body_err.add(fe.body_error_mm);
-        Vertices cloth, cloth_t;
+        FrameMeasures& fm = fe.measures;
+        measure_geometry(ch, predicted, truth, true, fm);
+        fm.body_distances_mm.clear(), fm.cloth_distances_mm.clear();  // not pooled here
+        if (std::isfinite(fm.root_rotation_error_deg)) rotation_errors.push_back(fm.root_rotation_error_deg);
+        const Vertices body_t = sample_vertices(t.body, b);
+        Vertices cloth_t;
         if (p.cloth.defined()) {
-          cloth = sample_vertices(p.cloth, b), cloth_t = sample_vertices(t.cloth, b);
-          fe.cloth_error_mm = mean_distance(cloth, gt_cloth[f]) * mpu * 1e3;
-          fe.chamfer_mm = chamfer_distance_mm(cloth, gt_cloth[f], ch.cloth->mesh.F, mpu);
-          cloth_err.add(fe.cloth_error_mm);
-          chamfer.add(fe.chamfer_mm);
+          cloth_t = sample_vertices(t.cloth, b);
           template_cloth_err.add(mean_distance(cloth_t, gt_cloth[f]) * mpu * 1e3);
         }
         const TriangleMesh* cloth_mesh = p.cloth.defined() ? &ch.cloth->mesh : nullptr;
         std::vector<double> ious(V), tmpl(V);
         tbb::parallel_for(0, V, [&](int w) {
           const Camera& cam = sup.silhouette_camera(f, w);
-          ious[w] = rendered_silhouette_iou(cam, ch.body.mesh, body, cloth_mesh, cloth_mesh ? &cloth : nullptr,
-                                            sup.mask(f, w));
+          ious[w] = rendered_silhouette_iou(cam, ch.body.mesh, predicted.body, cloth_mesh,
+                                            cloth_mesh ? &predicted.cloth : nullptr, sup.mask(f, w));
           tmpl[w] = rendered_silhouette_iou(cam, ch.body.mesh, body_t, cloth_mesh, cloth_mesh ? &cloth_t : nullptr,
                                             sup.mask(f, w));
         });
-        MeasuredMean frame_iou;
-        for (int w = 0; w < V; ++w) iou.add(ious[w]), tmpl_iou.add(tmpl[w]), frame_iou.add(ious[w]);
-        fe.iou = frame_iou.value();
+        measure_ious(ious, v, fm);
+        for (int w = 0; w < V; ++w) iou.add(ious[w]), tmpl_iou.add(tmpl[w]);
         if (p.cloth.defined()) {
-          cloth_seq[f] = cloth;
-          body_seq[f] = body;
-          const Penetration in = cloth_penetration(ch, body, cloth);
-          pen.sum += in.depth_sum * 1e3, pen.n += in.vertices_inside;
-          pen_all.sum += in.depth_sum * 1e3, pen_all.n += cloth.rows();
-          inside.sum += in.vertices_inside, inside.n += cloth.rows();
-          pen_max = std::max(pen_max, in.max_depth * 1e3);
-          fe.penetration_mean_all_mm = in.depth_sum * 1e3 / cloth.rows();
-          fe.penetrating_fraction = double(in.vertices_inside) / cloth.rows();
+          cloth_seq[f] = predicted.cloth;
+          body_seq[f] = predicted.body;
+          penetration.penetration_depth_sum_mm += fm.penetration_depth_sum_mm;
+          penetration.penetrating_vertices += fm.penetrating_vertices, penetration.cloth_vertices += fm.cloth_vertices;
+          penetration.penetration_max_mm = std::max(penetration.penetration_max_mm, fm.penetration_max_mm);
         }
         row_of[f] = e.per_frame.size();
         e.per_frame.push_back(fe);
       }
     }
     // Out-of-balance force of each three consecutive frames of this input view.
-    if (!measure_balance) continue;
+    if (!with_balance) continue;
     for (int f : frames) {
       if (!cloth_seq.count(f - 1) || !cloth_seq.count(f - 2) || !same_segment(info, f - 2, f)) continue;
-      const ClothBalance cb = cloth_out_of_balance(ch, simulation, info.fps, body_seq[f - 1], body_seq[f],
-                                                   cloth_seq[f - 2], cloth_seq[f - 1], cloth_seq[f]);
-      const std::vector<double> depth = cloth_signed_distances_mm(ch, body_seq[f], cloth_seq[f]);
-      const physics::VertexBalance& vb = cb.vertices;
-      std::vector<double> residual, outside;
-      MeasuredMean in_f, el_f, co_f, fr_f, rel_f;
-      for (int i : cb.free_vertices) {
-        residual.push_back(vb.residual[i]);
-        oob_values.push_back(vb.residual[i]);
-        oob_rel_values.push_back(vb.residual[i] / vb.weight[i]);
-        rel_f.add(vb.residual[i] / vb.weight[i]);
-        if (depth[i] >= 0) outside.push_back(vb.residual[i]), oob_outside_values.push_back(vb.residual[i]);
-        in_f.add(vb.inertia[i]), el_f.add(vb.elastic[i]), co_f.add(vb.collision[i]), fr_f.add(vb.friction[i]);
-        inertia.add(vb.inertia[i]), elastic.add(vb.elastic[i]), collision.add(vb.collision[i]),
-            friction.add(vb.friction[i]);
-      }
-      SplitFrameEvaluation& fe = e.per_frame[row_of.at(f)];
-      const Distribution d = distribution(residual);
-      fe.oob_mean_n = d.mean, fe.oob_p95_n = d.p95, fe.oob_max_n = d.max, fe.oob_mean_rel = rel_f.value();
-      fe.oob_outside_mean_n = distribution(outside).mean;
-      fe.inertia_mean_n = in_f.value(), fe.elastic_mean_n = el_f.value(), fe.collision_mean_n = co_f.value(),
-      fe.friction_mean_n = fr_f.value();
-      ++e.oob_frames;
+      measure_balance(ch, simulation, info.fps, body_seq[f - 1], body_seq[f], cloth_seq[f - 2], cloth_seq[f - 1],
+                      cloth_seq[f], e.per_frame[row_of.at(f)].measures, &balance);
     }
   }
+  for (const SplitFrameEvaluation& fe : e.per_frame) means.add(fe.measures);
+  e.oob_frames = balance.frames;
   e.keypoint_error_px = kp.value();
   e.mean_pose_keypoint_error_px = mean_kp.value();
-  e.joint_error_mm = joint.value();
-  e.joint_error_root_relative_mm = joint_aligned.value();
-  e.root_rotation_error_deg = rotation_err.value();
+  e.joint_error_mm = means.mean("mpjpe_mm");
+  e.joint_error_root_relative_mm = means.mean("mpjpe_root_relative_mm");
+  e.root_rotation_error_deg = means.mean("root_rotation_error_deg");
   const RotationErrorSummary rotation = summarize_rotation_errors(rotation_errors);
   e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
   e.root_rotation_above_45 = rotation.above_45;
   e.mean_pose_joint_error_root_relative_mm = mean_joint_aligned.value();
   e.silhouette_iou = iou.value();
   e.template_silhouette_iou = tmpl_iou.value();
-  e.cloth_error_mm = cloth_err.value();
-  e.chamfer_mm = chamfer.value();
+  e.cloth_error_mm = means.mean("cloth_error_mean_mm");
+  e.chamfer_mm = means.mean("cloth_chamfer_mm");
   e.skinned_true_pose_cloth_error_mm = skinned_cloth_err.value();
   e.template_cloth_error_mm = template_cloth_err.value();
-  e.body_error_mm = body_err.value();
+  e.body_error_mm = means.mean("body_error_mean_mm");
   if (ch.has_cloth()) {
-    e.penetration_mean_mm = pen.n ? pen.value() : 0.0;  // no vertex inside: depth 0
-    e.penetration_mean_all_mm = pen_all.value();
-    e.penetration_max_mm = pen_max;
-    e.penetrating_fraction = inside.value();
+    const double n = double(penetration.cloth_vertices);
+    e.penetration_mean_mm = penetration.penetrating_vertices
+                                ? penetration.penetration_depth_sum_mm / double(penetration.penetrating_vertices)
+                                : 0.0;  // no vertex inside: depth 0
+    e.penetration_mean_all_mm = n > 0 ? penetration.penetration_depth_sum_mm / n : kNotMeasured;
+    e.penetration_max_mm = penetration.penetration_max_mm;
+    e.penetrating_fraction = n > 0 ? double(penetration.penetrating_vertices) / n : kNotMeasured;
   }
-  e.oob_n = distribution(oob_values);
-  e.oob_rel = distribution(oob_rel_values);
-  e.oob_outside_n = distribution(oob_outside_values);
-  e.inertia_mean_n = inertia.value();
-  e.elastic_mean_n = elastic.value();
-  e.collision_mean_n = collision.value();
-  e.friction_mean_n = friction.value();
+  e.oob_n = distribution(balance.n);
+  e.oob_rel = distribution(balance.rel);
+  e.oob_outside_n = distribution(balance.outside_n);
+  e.inertia_mean_n = balance.inertia.value();
+  e.elastic_mean_n = balance.elastic.value();
+  e.collision_mean_n = balance.collision.value();
+  e.friction_mean_n = balance.friction.value();
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;
 }

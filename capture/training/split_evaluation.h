@@ -28,7 +28,8 @@
 // With the config's oracle_pose the skeleton is posed by gt/pose.motion (the root
 // rotation error is then not measured), isolating the garment from pose error.
 // `per_frame` lists each prediction's measures, in (view, frame) order, for paired
-// comparisons of two models on the same split.
+// comparisons of two models on the same split; each row is {frame, view, then every
+// metric of frame_metrics() by its name}.
 #include <string>
 #include <vector>
 
@@ -36,17 +37,11 @@
 
 namespace weft::capture {
 
-// One prediction's measures (NaN where not measured).
+// One prediction's measures (NaN where not measured): frame_measures.h's, the same as
+// `weft eval`'s. Its JSON row carries every metric of frame_metrics() by name.
 struct SplitFrameEvaluation {
   int frame = 0, view = 0;
-  double root_rotation_error_deg = kNotMeasured;  // the pivot joint's global rotation (degrees)
-  double joint_error_mm = kNotMeasured, cloth_error_mm = kNotMeasured, chamfer_mm = kNotMeasured, body_error_mm = kNotMeasured, iou = kNotMeasured;
-  double penetration_mean_all_mm = kNotMeasured;  // mean depth over every cloth vertex (0 outside)
-  double penetrating_fraction = kNotMeasured;
-  // Out-of-balance force over the free vertices (NaN without two predecessors in the clip).
-  double oob_mean_n = kNotMeasured, oob_p95_n = kNotMeasured, oob_max_n = kNotMeasured, oob_mean_rel = kNotMeasured;
-  double oob_outside_mean_n = kNotMeasured;  // over the free vertices outside the body
-  double inertia_mean_n = kNotMeasured, elastic_mean_n = kNotMeasured, collision_mean_n = kNotMeasured, friction_mean_n = kNotMeasured;
+  FrameMeasures measures;
 };
 
 struct SplitEvaluation {

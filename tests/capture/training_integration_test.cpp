@@ -281,21 +281,21 @@ TEST(Training, SplitEvaluationMeasuresEveryPrediction) {
   int with_force = 0;
   double sum_cloth = 0, sum_force = 0;
   for (const auto& row : j["per_frame"]) {
-    ASSERT_TRUE(row["cloth_error_mm"].is_number());
-    ASSERT_TRUE(row["chamfer_mm"].is_number());
+    ASSERT_TRUE(row["cloth_error_mean_mm"].is_number());
+    ASSERT_TRUE(row["cloth_chamfer_mm"].is_number());
     // A surface distance never exceeds the vertex-to-vertex one.
-    EXPECT_LE(row["chamfer_mm"].get<double>(), row["cloth_error_mm"].get<double>() + 1e-9);
-    sum_cloth += row["cloth_error_mm"].get<double>();
+    EXPECT_LE(row["cloth_chamfer_mm"].get<double>(), row["cloth_error_mean_mm"].get<double>() + 1e-9);
+    sum_cloth += row["cloth_error_mean_mm"].get<double>();
     const int frame = row["frame"];
     if (frame >= 2) {
       ++with_force;
-      sum_force += row["oob_mean_n"].get<double>();
-      EXPECT_GE(row["oob_p95_n"].get<double>(), 0.0);
-      EXPECT_LE(row["oob_p95_n"].get<double>(), row["oob_max_n"].get<double>());
+      sum_force += row["oob_force_mean_n"].get<double>();
+      EXPECT_GE(row["oob_force_p95_n"].get<double>(), 0.0);
+      EXPECT_LE(row["oob_force_p95_n"].get<double>(), row["oob_force_max_n"].get<double>());
       EXPECT_TRUE(row["inertia_mean_n"].is_number() && row["elastic_mean_n"].is_number() &&
                   row["collision_mean_n"].is_number() && row["friction_mean_n"].is_number());
     } else {
-      EXPECT_TRUE(row["oob_mean_n"].is_null()) << "frame " << frame << " has no two predecessors";
+      EXPECT_TRUE(row["oob_force_mean_n"].is_null()) << "frame " << frame << " has no two predecessors";
     }
   }
   EXPECT_EQ(with_force, 2 * views);
