@@ -3,6 +3,7 @@
 #include "capture/garment/garment_collision_resolution.h"
 #include "capture/garment/garment_simulator.h"
 #include "graph/error.h"
+#include "ops/ops.h"
 #include "physics/collision_resolution.h"
 
 namespace weft::capture {
@@ -62,6 +63,14 @@ std::vector<Vertices> simulation_loss_targets(const std::vector<physics::StepRes
   }
   rec.frames_kept = int(targets.size());
   return targets;
+}
+
+Tensor simulation_loss(const Tensor& predicted, const Tensor& targets, double metres_per_unit) {
+  WEFT_CHECK(predicted.shape() == targets.shape() && predicted.dim() == 3 && predicted.size(2) == 3,
+             "simulation_loss: predicted ", shape_str(predicted.shape()), " and targets ", shape_str(targets.shape()),
+             " must both be [n,V,3]");
+  const Tensor d = ops::sub(predicted, targets);
+  return ops::scale(ops::mean(ops::mul(d, d)), 3.0 * metres_per_unit * metres_per_unit);
 }
 
 }  // namespace weft::capture

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "graph/tensor.h"
 #include "capture/character/character.h"
 #include "capture/garment/garment_config.h"
 #include "physics/simulation_window.h"
@@ -58,5 +59,10 @@ physics::SimulationWindow simulation_loss_window(const Character& character, con
 // iterations and frames kept.
 std::vector<Vertices> simulation_loss_targets(const std::vector<physics::StepResult>& results,
                                               double metres_per_unit, SimulationWindowRecord& record);
+
+// L_sim itself: the mean over vertices of the squared distance (m²) between predicted
+// cloth [n,V,3] and its simulated targets [n,V,3] (character units; the targets carry no
+// gradient: the simulator is a stop-gradient).
+Tensor simulation_loss(const Tensor& predicted, const Tensor& targets, double metres_per_unit);
 
 }  // namespace weft::capture

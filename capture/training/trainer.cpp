@@ -379,18 +379,14 @@ Tensor Trainer::simulation_term(const CapturePrediction& p, const SimulatedWindo
   const double mpu = character_.metres_per_unit;
   const int64_t n = sims.rows.size(), V = p.cloth.size(1);
   const Tensor predicted = ops::index_select(p.cloth, 0, Tensor::from_indices({n}, sims.rows));
-  const Tensor d = ops::sub(predicted, Tensor::from_data({n, V, 3}, sims.target, DType::F32));
-  return ops::scale(ops::mean(ops::mul(d, d)), 3.0 * mpu * mpu);
+  return simulation_loss(predicted, Tensor::from_data({n, V, 3}, sims.target, DType::F32), mpu);
 }
 
 Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, nn::Optimizer& opt,
                                         nn::DataParallel& dp, const std::vector<Batch>& shards, PartTimes& times) {
   StepResult r;
-  const std::map<std::string, double> weights = {{"landmarks", stage.weights.landmarks},
-                                                 {"silhouette", stage.weights.silhouette},
-                                                 {"arap", stage.weights.arap},
-                                                 {"attachment", stage.weights.attachment},
-                                                 {"simulation", stage.weights.simulation}};
+  std::map<std::string, double> weights;
+  for (const LossTerm& term : loss_terms()) weights[term.name] = stage.weights.*term.weight;
   // Per figure: Σ_j w_j · value_j over this process's shards (w_j: the shard's share of
   // the global batch, so the gradient is that of this weighted sum), and in how many
   // shards it was present. One shard on one process: the batch's own values.
@@ -438,12 +434,17 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   // The step's figures over all ranks, in one small all-reduce: what rank 0 logs, and
   // what every rank checks before its optimiser steps.
   auto t = Clock::now();
-  static const char* kFigures[] = {"arap", "attachment", "landmarks", "silhouette", "simulation", "keypoint_px", "total"};
+  static const std::vector<std::string> kFigures = [] {
+    std::vector<std::string> names;
+    for (const LossTerm& term : loss_terms()) names.push_back(term.name);
+    names.insert(names.end(), {"keypoint_px", "total"});
+    return names;
+  }();
   static const physics::StepStatus kFailures[] = {physics::StepStatus::max_iterations,
                                                   physics::StepStatus::line_search_failed,
                                                   physics::StepStatus::non_finite};
   std::vector<double> all;
-  for (const char* name : kFigures) {
+  for (const std::string& name : kFigures) {
     const auto it = sums.find(name);
     all.push_back(it == sums.end() ? 0.0 : it->second.first);
     all.push_back(it == sums.end() ? 0.0 : it->second.second);

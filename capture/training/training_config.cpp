@@ -27,6 +27,17 @@ int TrainingConfig::total_steps() const {
   return n;
 }
 
+const std::vector<LossTerm>& loss_terms() {
+  static const std::vector<LossTerm> table = {
+      {"landmarks", &LossWeights::landmarks, "L_lm: confidence-weighted squared pixel error of the projected keypoints"},
+      {"silhouette", &LossWeights::silhouette, "L_sil: squared distance-transform value at the boundary vertices"},
+      {"arap", &LossWeights::arap, "L_arap: as-rigid-as-possible energy of the embedded graphs"},
+      {"attachment", &LossWeights::attachment, "L_att: squared distance of the garment's anchors to their body triangles"},
+      {"simulation", &LossWeights::simulation, "L_sim: squared distance of the predicted cloth to its simulation"},
+  };
+  return table;
+}
+
 const StageConfig& TrainingConfig::stage_of(int64_t step, int64_t* stage_start) const {
   int64_t start = 0;
   for (const StageConfig& s : stages) {
@@ -43,17 +54,14 @@ namespace {
 
 void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
   const std::string where = std::string("stages.") + stage_name(s.kind) + ".";
-  y.numbers(n, where,
-            {{"lr", &s.lr, 0, 10},
-             {"weight_decay", &s.weight_decay, 0, 10},
-             {"final_lr_fraction", &s.final_lr_fraction, 0, 1},
-             {"landmarks", &s.weights.landmarks, 0, 1e9},
-             {"silhouette", &s.weights.silhouette, 0, 1e9},
-             {"arap", &s.weights.arap, 0, 1e9},
-             {"cloth_arap", &s.weights.cloth_arap, 0, 1e9},
-             {"attachment", &s.weights.attachment, 0, 1e9},
-             {"simulation", &s.weights.simulation, 0, 1e9}},
-            {{"steps", &s.steps, 0, 1e8}, {"batch_size", &s.batch_size, 1, 4096}}, {});
+  std::vector<NumberKey> numbers = {{"lr", &s.lr, 0, 10},
+                                    {"weight_decay", &s.weight_decay, 0, 10},
+                                    {"final_lr_fraction", &s.final_lr_fraction, 0, 1}};
+  for (const LossTerm& t : loss_terms()) {
+    numbers.push_back({t.name, &(s.weights.*t.weight), 0, 1e9});
+    if (t.weight == &LossWeights::arap) numbers.push_back({"cloth_arap", &s.weights.cloth_arap, 0, 1e9});
+  }
+  y.numbers(n, where, numbers, {{"steps", &s.steps, 0, 1e8}, {"batch_size", &s.batch_size, 1, 4096}}, {});
   if (s.weights.cloth_arap < 0) s.weights.cloth_arap = s.weights.arap;
   if (s.weights.cloth_arap > 0 && s.weights.arap <= 0)
     y.fail_at(n["cloth_arap"], where + "cloth_arap", "needs arap > 0 (arap weighs the body's graph; cloth_arap the garment's)");

@@ -23,6 +23,19 @@ struct LossWeights {
   double simulation = 0;  // L_sim
 };
 
+// The loss terms of training, one entry each: `name` is the key of its weight under
+// stages.<stage> in a config and its column in RUN/losses.csv; `weight` is where
+// LossWeights holds it. A new loss is a LossWeights field, its entry here and its
+// computation in the trainer; tests/gradcheck/loss_terms_gradcheck_test.cpp fails until
+// it has a gradient check. (cloth_arap, which weighs the garment's part of `arap`, is the
+// one weight key that is not a term of its own.)
+struct LossTerm {
+  const char* name;
+  double LossWeights::*weight;
+  const char* meaning;
+};
+const std::vector<LossTerm>& loss_terms();
+
 // The stages, in the order they run: (a) PoseNet on L_lm; (b) PADefNet's warm start with
 // PoseNet frozen; (c) the physics-aware stage (PoseNet frozen).
 enum class StageKind { pose, warmup, physics };

@@ -1,0 +1,158 @@
+// Every loss term of training (loss_terms(), capture/training/training_config.h) checked
+// whole against central differences in float64: the function the trainer calls, not only
+// the ops it is made of. A case is named "loss term <name>: ..."; the coverage test fails
+// on a term of the table without one, as GradcheckCoverage does for ops.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "capture/deformation/losses.h"
+#include "capture/training/simulation_loss.h"
+#include "capture/training/training_config.h"
+#include "tests/gradcheck/cases.h"
+
+namespace weft::testing {
+namespace {
+
+using capture::loss_terms;
+using capture::LossTerm;
+
+std::string case_prefix(const std::string& term) { return "loss term " + term + ":"; }
+
+// A four-node graph, two edges per node at least (the ARAP test's).
+capture::ArapTerms small_arap() {
+  capture::EmbeddedGraph g;
+  g.nodes.resize(4, 3);
+  g.nodes << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  g.edges.resize(5, 2);
+  g.edges << 0, 1, 0, 2, 0, 3, 1, 2, 2, 3;
+  g.rigidity = Eigen::Vector4d(1, 0.5, 2, 1);
+  return capture::arap_terms(g, DType::F64);
+}
+
+// Two anchors on two body triangles, with barycentric weights summing to 1.
+capture::AttachmentTerms small_attachment() {
+  capture::Attachment a;
+  a.anchors.resize(2);
+  a.anchors << 1, 3;
+  a.triangles.resize(2);
+  a.triangles << 0, 1;
+  a.body_vertices.resize(2, 3);
+  a.body_vertices << 0, 1, 2, 2, 1, 3;
+  a.barycentric.resize(2, 3);
+  a.barycentric << 0.2, 0.3, 0.5, 0.6, 0.1, 0.3;
+  return capture::attachment_terms(a, DType::F64);
+}
+
+// Image points away from the pixel grid, where bilinear sampling has its kinks.
+Tensor off_grid_points(Generator& g, int64_t B, int64_t N, double max_x, double max_y) {
+  Tensor p = Tensor::empty({B, N, 2}, DType::F64);
+  double* d = p.data<double>();
+  for (int64_t i = 0; i < B * N; ++i) {
+    d[2 * i] = std::floor(g.uniform(1.0, max_x)) + g.uniform(0.2, 0.8);
+    d[2 * i + 1] = std::floor(g.uniform(1.0, max_y)) + g.uniform(0.2, 0.8);
+  }
+  return p;
+}
+
+}  // namespace
+
+WEFT_GRADCHECK_CASES(loss_terms) {
+  std::vector<GradcheckCase> cases;
+  {
+    GradcheckCase c;
+    c.op = "mul";
+    c.name = case_prefix("landmarks") + " projected [2,4,2], detections, confidences";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 4, 2}, -50, 50), uniform64(g, {2, 4, 2}, -50, 50),
+                                 uniform64(g, {2, 4}, 0, 1)};
+    };
+    c.function = [](const std::vector<Tensor>& in) { return capture::landmark_loss(in[0], in[1], in[2]); };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
+    c.op = "image_sample_bilinear";
+    c.name = case_prefix("silhouette") + " 5 boundary points in a 6x8 distance transform, per-point rho";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{off_grid_points(g, 1, 5, 6, 4), uniform64(g, {1, 6, 8}, 0, 5),
+                                 uniform64(g, {1, 5}, 0, 1)};
+    };
+    c.wrt = {0, 1};  // ρ is a constant of the step (silhouette_weights)
+    c.function = [](const std::vector<Tensor>& in) { return capture::silhouette_loss(in[0], in[1], in[2]); };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
+    c.op = "arap_energy";
+    c.name = case_prefix("arap") + " 4 nodes, 5 edges, 2 frames of rotations and translations";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 4, 3, 3}), uniform64(g, {2, 4, 3}, -0.5, 0.5)};
+    };
+    c.function = [terms = small_arap()](const std::vector<Tensor>& in) {
+      return capture::arap_loss(terms, in[0], in[1]);
+    };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
+    c.op = "index_select";
+    c.name = case_prefix("attachment") + " 2 anchors of 4 cloth vertices on 4 body vertices, 2 frames";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 4, 3}), uniform64(g, {2, 4, 3})};
+    };
+    c.function = [terms = small_attachment()](const std::vector<Tensor>& in) {
+      return capture::attachment_loss(terms, in[0], in[1]);
+    };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
+    c.op = "mul";
+    c.name = case_prefix("simulation") + " 2 frames of 5 vertices against their targets, millimetre units";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 5, 3}, -100, 100), uniform64(g, {2, 5, 3}, -100, 100)};
+    };
+    c.wrt = {0};  // the targets are the simulator's: a stop-gradient
+    c.function = [](const std::vector<Tensor>& in) { return capture::simulation_loss(in[0], in[1], 1e-3); };
+    cases.push_back(c);
+  }
+  return cases;
+}
+
+namespace {
+
+TEST(LossTermCoverage, EveryLossTermHasAGradientCheck) {
+  std::string missing;
+  for (const LossTerm& t : loss_terms()) {
+    bool found = false;
+    for (const GradcheckCase& c : gradcheck_cases()) found |= c.name.rfind(case_prefix(t.name), 0) == 0;
+    if (!found) missing += std::string(" ") + t.name;
+  }
+  EXPECT_TRUE(missing.empty()) << "loss terms without a \"loss term <name>:\" gradient check:" << missing;
+}
+
+TEST(LossTermCoverage, EveryLossCaseNamesATermOfTheTable) {
+  for (const GradcheckCase& c : gradcheck_cases()) {
+    if (c.name.rfind("loss term ", 0) != 0) continue;
+    bool known = false;
+    for (const LossTerm& t : loss_terms()) known |= c.name.rfind(case_prefix(t.name), 0) == 0;
+    EXPECT_TRUE(known) << c.name;
+  }
+}
+
+TEST(LossTermCoverage, EveryTermIsAStageWeightOfTheConfig) {
+  // A physics stage that sets every term's weight parses, and each key lands in its own field.
+  std::string yaml = "stages:\n  physics: {steps: 1, batch_size: 8";
+  double value = 1;
+  for (const LossTerm& t : loss_terms()) yaml += ", " + std::string(t.name) + ": " + std::to_string(value++);
+  yaml += "}\n";
+  const capture::TrainingConfig cfg = capture::parse_training_config(yaml, "loss_terms.yaml", ".");
+  const capture::StageConfig& physics = cfg.stages.at(2);
+  ASSERT_EQ(physics.kind, capture::StageKind::physics);
+  value = 1;
+  for (const LossTerm& t : loss_terms()) EXPECT_EQ(physics.weights.*t.weight, value++) << t.name;
+}
+
+}  // namespace
+}  // namespace weft::testing
