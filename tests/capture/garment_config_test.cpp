@@ -35,6 +35,10 @@ SynthSimulationConfig unusual_settings() {
   s.max_iterations = 77;
   s.tolerance = 3e-4;
   s.max_penetration = 0.02;
+  s.collision_second_sheet_deg = 30.5;
+  s.per_vertex_step_limits = !SynthSimulationConfig{}.per_vertex_step_limits;
+  s.max_body_motion = 0.0125;
+  s.max_step_halvings = 2;
   return s;
 }
 
@@ -69,4 +73,28 @@ TEST(GarmentConfig, ADatasetCarriesItsSimulationOrSaysHowToGetIt) {
   dir.write("dataset.yaml", "format: weft-synth/1\nsimulation:\n  material: {poisson_ratio: 0.5}\n");
   expect_error([&] { read_dataset_simulation(folder); },
                {"dataset.yaml:3", "simulation.material.poisson_ratio", "[0, 0.5)"});
+}
+
+// The settings that decide whether a frame fails: a value out of range or of the wrong
+// type is one error naming the file, the line and the key, and what was expected.
+TEST(GarmentConfig, BadFailedFrameSettingsNameTheLineAndTheKey) {
+  const auto parse = [](const std::string& section) {
+    StrictYaml y;
+    y.file = "recipe.yaml";
+    const YAML::Node root = y.parse("name: x\nsimulation:\n" + section);
+    SynthSimulationConfig s;
+    parse_simulation_config(y, root["simulation"], s);
+    return s;
+  };
+  EXPECT_EQ(parse("  max_body_motion: 0.02\n").max_body_motion, 0.02);
+  expect_error([&] { parse("  max_body_motion: 2\n"); }, {"recipe.yaml:3", "simulation.max_body_motion"});
+  expect_error([&] { parse("  max_body_motion: fast\n"); }, {"recipe.yaml:3", "simulation.max_body_motion"});
+  expect_error([&] { parse("  max_step_halvings: 11\n"); }, {"recipe.yaml:3", "simulation.max_step_halvings"});
+  expect_error([&] { parse("  max_step_halvings: -1\n"); }, {"recipe.yaml:3", "simulation.max_step_halvings"});
+  expect_error([&] { parse("  collision: {second_sheet_deg: 180}\n"); },
+               {"recipe.yaml:3", "simulation.collision.second_sheet_deg"});
+  expect_error([&] { parse("  solver: {per_vertex_step_limits: maybe}\n"); },
+               {"recipe.yaml:3", "simulation.solver.per_vertex_step_limits", "true or false"});
+  expect_error([&] { parse("  solver: {per_vertex_step_limit: true}\n"); },
+               {"recipe.yaml:3", "per_vertex_step_limit"});
 }
