@@ -6,7 +6,7 @@
 namespace weft::apps {
 
 void add_ops_command(CLI::App& app);
-void add_demo_command(CLI::App& app);
+void add_engine_check_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
 void add_pose_command(CLI::App& app);
 void add_character_command(CLI::App& app);

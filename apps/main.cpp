@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
       weft::set_conv_backend(weft::parse_conv_backend(conv_backend, "--conv-backend"));
   });
   weft::apps::add_ops_command(app);
-  weft::apps::add_demo_command(app);
+  weft::apps::add_engine_check_command(app);
   weft::apps::add_sim_command(app);
   weft::apps::add_pose_command(app);
   weft::apps::add_character_command(app);

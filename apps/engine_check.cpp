@@ -1,6 +1,7 @@
-// `weft demo`: a short tour of what exists, end to end. For now: the engine trains a
-// small multilayer perceptron on a synthetic regression task (y = sin(2x₁)·cos(x₂)) and
-// prints the falling loss.
+// `weft engine-check`: the autodiff engine alone, in seconds: it trains a small
+// multilayer perceptron on a synthetic regression task (y = sin(2x₁)·cos(x₂)) and prints
+// the falling loss. A check that a build's engine learns, not a demo of capture (that is
+// scripts/demo.sh).
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -14,7 +15,7 @@
 namespace weft::apps {
 namespace {
 
-struct DemoOptions {
+struct EngineCheckOptions {
   int steps = 300;
   int hidden = 64;
   int batch = 256;
@@ -32,8 +33,8 @@ Tensor target_of(const Tensor& x) {
   return y;
 }
 
-void run_demo(const DemoOptions& o) {
-  spdlog::info("weft demo: {} ops registered ({} differentiable); training a 2-{}-{}-1 tanh "
+void run_engine_check(const EngineCheckOptions& o) {
+  spdlog::info("weft engine-check: {} ops registered ({} differentiable); training a 2-{}-{}-1 tanh "
                "MLP on y = sin(2x1)*cos(x2)",
                OpRegistry::instance().all().size(),
                [] {
@@ -97,17 +98,18 @@ void run_demo(const DemoOptions& o) {
 
 }  // namespace
 
-void add_demo_command(CLI::App& app) {
-  static DemoOptions o;
+void add_engine_check_command(CLI::App& app) {
+  static EngineCheckOptions o;
   auto* cmd = app.add_subcommand(
-      "demo", "Run a small end-to-end demo: the engine trains an MLP on a synthetic "
-              "regression task and prints the falling loss");
+      "engine-check",
+      "Check the autodiff engine in seconds: train a small MLP on a synthetic regression task\n"
+      "(y = sin(2 x1) cos(x2)) and print the falling loss. The capture demo is scripts/demo.sh.");
   cmd->add_option("--steps", o.steps, "Training steps")->check(CLI::Range(10, 100000));
   cmd->add_option("--hidden", o.hidden, "Hidden units per layer")->check(CLI::Range(1, 4096));
   cmd->add_option("--batch", o.batch, "Batch size")->check(CLI::Range(1, 65536));
   cmd->add_option("--lr", o.learning_rate, "SGD learning rate (momentum 0.9)");
   cmd->add_option("--seed", o.seed, "Random seed");
-  cmd->callback([] { run_demo(o); });
+  cmd->callback([] { run_engine_check(o); });
 }
 
 }  // namespace weft::apps
