@@ -14,6 +14,7 @@
 #include "capture/evaluation/frame_measures.h"
 #include "capture/render/renderer.h"
 #include "capture/studio/studio_rig.h"
+#include "tests/capture/grid_mesh.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft;
@@ -24,24 +25,6 @@ using weft::capture::testing::ScratchDir;
 
 namespace {
 
-// A grid of nx × ny vertices spanning `size` (character units) in the x-y plane at `origin`.
-TriangleMesh grid(const Eigen::Vector3d& origin, double size, int nx, int ny) {
-  TriangleMesh m;
-  m.V.resize(nx * ny, 3);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i)
-      m.V.row(j * nx + i) = (origin + Eigen::Vector3d(size * i / (nx - 1), size * j / (ny - 1), 0)).transpose();
-  m.F.resize(2 * (nx - 1) * (ny - 1), 3);
-  int f = 0;
-  for (int j = 0; j + 1 < ny; ++j)
-    for (int i = 0; i + 1 < nx; ++i) {
-      const int a = j * nx + i;
-      m.F.row(f++) << a, a + 1, a + nx + 1;
-      m.F.row(f++) << a, a + nx + 1, a + nx;
-    }
-  return m;
-}
-
 // A character in metres: a sphere body (radius 0.3 m at `body_centre`) and a 0.2 m
 // square garment with no anchors (nothing pinned).
 Character sphere_and_sheet(const Eigen::Vector3d& body_centre) {
@@ -51,7 +34,7 @@ Character sphere_and_sheet(const Eigen::Vector3d& body_centre) {
   ch.metres_per_unit = 1.0;
   ch.body.mesh = uv_sphere(body_centre, 0.3, 16, 32);
   ch.cloth.emplace();
-  ch.cloth->mesh = grid(Eigen::Vector3d(-0.1, 0.9, 0.4), 0.2, 5, 5);
+  ch.cloth->mesh = weft::capture::testing::grid_mesh(Eigen::Vector3d(-0.1, 0.9, 0.4), 0.2, 5, 5);
   return ch;
 }
 

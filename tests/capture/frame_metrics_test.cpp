@@ -15,29 +15,12 @@
 #include "capture/evaluation/frame_measures.h"
 #include "geometry/mesh.h"
 #include "graph/error.h"
+#include "tests/capture/grid_mesh.h"
 
 using namespace weft;
 using namespace weft::capture;
 
 namespace {
-
-// A grid of 5 × 5 vertices spanning 0.2 m in the x-y plane at `origin` (metres).
-TriangleMesh sheet(const Eigen::Vector3d& origin) {
-  const int n = 5;
-  TriangleMesh m;
-  m.V.resize(n * n, 3);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) m.V.row(j * n + i) = (origin + Eigen::Vector3d(0.05 * i, 0.05 * j, 0)).transpose();
-  m.F.resize(2 * (n - 1) * (n - 1), 3);
-  int f = 0;
-  for (int j = 0; j + 1 < n; ++j)
-    for (int i = 0; i + 1 < n; ++i) {
-      const int a = j * n + i;
-      m.F.row(f++) << a, a + 1, a + n + 1;
-      m.F.row(f++) << a, a + n + 1, a + n;
-    }
-  return m;
-}
 
 // A character in metres: a sphere body (`radius` at `centre`) and the sheet garment
 // centred at (0, 1, 0.4), no anchors.
@@ -48,7 +31,7 @@ Character sphere_and_sheet(const Eigen::Vector3d& centre, double radius = 0.3) {
   ch.metres_per_unit = 1.0;
   ch.body.mesh = uv_sphere(centre, radius, 24, 48);
   ch.cloth.emplace();
-  ch.cloth->mesh = sheet(Eigen::Vector3d(-0.1, 0.9, 0.4));
+  ch.cloth->mesh = weft::capture::testing::grid_mesh(Eigen::Vector3d(-0.1, 0.9, 0.4), 0.2, 5, 5);
   return ch;
 }
 
