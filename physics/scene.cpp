@@ -137,17 +137,11 @@ std::string sequence_path(const std::string& pattern, int frame) {
   return m.prefix().str() + buf + m.suffix().str();
 }
 
-Scene load_scene(const std::string& path) {
-  WEFT_CHECK(fs::exists(path), path, ": scene file not found");
-  StrictYaml yaml;
-  yaml.file = path;
-  yaml.dir = fs::path(path).parent_path();
-  const YAML::Node root = yaml.parse(read_file_bytes(path));
-  Scene scene;
-  scene.file = path;
-  Section top(yaml, root, "");
-  top.allow({"time_step", "frames", "substeps", "gravity", "cloth", "obstacles", "collision",
-             "solver"});
+namespace {
+
+// The top level's time step, frame count, sub-steps and gravity.
+void read_timing(const Section& top, Scene& scene) {
+  const std::string& path = scene.file;
   SimulationSettings& s = scene.settings;
   s.time_step = top.positive("time_step", s.time_step);
   scene.frames = top.get_or<int>("frames", scene.frames, "an integer");
@@ -155,14 +149,12 @@ Scene load_scene(const std::string& path) {
   s.substeps = top.get_or<int>("substeps", 1, "an integer");
   WEFT_CHECK(s.substeps >= 1, path, ": 'substeps' must be >= 1, got ", s.substeps);
   if (top.has("gravity")) s.gravity = top.vector("gravity", 3);
+}
 
-  WEFT_CHECK(top.has("cloth"), path, ": missing key 'cloth'");
-  Section cloth(yaml, top.node("cloth"), "cloth");
-  cloth.allow({"grid", "mesh", "material", "pins", "pin_stiffness", "initial"});
-  if (cloth.has("material")) read_cloth_material(yaml, cloth.node("material"), "cloth.material", s.material);
-  s.pin_stiffness = cloth.positive("pin_stiffness", s.pin_stiffness);
-  WEFT_CHECK(cloth.has("grid") != cloth.has("mesh"), path,
-             ": 'cloth' needs exactly one of 'grid' or 'mesh'");
+// The cloth's rest shape: a generated grid or an OBJ mesh, with the material's density.
+void read_cloth_shape(const StrictYaml& yaml, const Section& cloth, Scene& scene) {
+  const std::string& path = scene.file;
+  const double density = scene.settings.material.density;
   if (cloth.has("grid")) {
     Section grid(yaml, cloth.node("grid"), "cloth.grid");
     grid.allow({"size", "resolution", "origin", "plane"});
@@ -176,109 +168,171 @@ Scene load_scene(const std::string& path) {
     WEFT_CHECK(plane == "xy" || plane == "xz" || plane == "yz", path,
                ": 'cloth.grid.plane' must be xy, xz or yz, got '", plane, "'");
     scene.cloth = make_grid_cloth(Vec3(origin), size[0], size[1], static_cast<int>(res[0]),
-                                  static_cast<int>(res[1]), plane.c_str(), s.material.density);
+                                  static_cast<int>(res[1]), plane.c_str(), density);
   } else {
     const std::string file = resolve(path, cloth.get<std::string>("mesh", "a file path"));
     WEFT_CHECK(fs::exists(file), path, ": 'cloth.mesh': file not found: ", file);
     const TriangleMesh m = read_obj(file);
-    scene.cloth = make_cloth_mesh(positions_of(m), triangles_of(m), s.material.density);
+    scene.cloth = make_cloth_mesh(positions_of(m), triangles_of(m), density);
   }
-  scene.initial = scene.initial_previous = scene.cloth.rest;
-  if (cloth.has("initial")) {
-    // Any state, as network predictions are: stretched, compressed, inside an obstacle.
-    Section init(yaml, cloth.node("initial"), "cloth.initial");
-    init.allow({"positions", "previous"});
-    auto read_state = [&](const char* k) {
-      const std::string key = init.key(k);
-      const std::string file = resolve(path, init.get<std::string>(k, "a file path"));
-      WEFT_CHECK(fs::exists(file), path, ": '", key, "': file not found: ", file);
-      const TriangleMesh m = read_obj(file);
-      WEFT_CHECK(m.num_vertices() == scene.cloth.num_vertices(), path, ": '", key, "': ", file, " has ",
-                 m.num_vertices(), " vertices, the cloth has ", scene.cloth.num_vertices());
-      return positions_of(m);
-    };
-    scene.initial = read_state("positions");
-    scene.initial_previous = init.has("previous") ? read_state("previous") : scene.initial;
-  }
-  if (cloth.has("pins")) {
-    const YAML::Node pins = cloth.node("pins");
-    WEFT_CHECK(pins.IsSequence(), path, ": 'cloth.pins' must be a list of vertex ids");
-    for (size_t k = 0; k < pins.size(); ++k) {
-      const int id = cloth.convert<int>(pins[k], "cloth.pins", "a list of integer vertex ids");
-      WEFT_CHECK(id >= 0 && id < scene.cloth.num_vertices(), path, ": 'cloth.pins': vertex ", id,
-                 " outside [0, ", scene.cloth.num_vertices(), ")");
-      scene.pins.push_back(id);
-    }
-  }
+}
 
-  if (top.has("obstacles")) {
-    const YAML::Node list = top.node("obstacles");
-    WEFT_CHECK(list.IsSequence(), path, ": 'obstacles' must be a list");
-    int sequences = 0;
-    for (size_t k = 0; k < list.size(); ++k) {
-      const std::string prefix = "obstacles[" + std::to_string(k) + "]";
-      Section o(yaml, list[k], prefix);
-      o.allow({"sphere", "mesh", "mesh_sequence", "inactive_faces", "friction"});
-      SceneObstacle ob;
-      ob.friction = o.number_or("friction", ob.friction);
-      WEFT_CHECK(std::isfinite(ob.friction) && ob.friction >= 0, path, ": '", o.key("friction"),
-                 "' must be >= 0, got ", ob.friction);
-      const int kinds = o.has("sphere") + o.has("mesh") + o.has("mesh_sequence");
-      WEFT_CHECK(kinds == 1, path, ": '", prefix, "' needs exactly one of sphere, mesh, mesh_sequence");
-      if (o.has("sphere")) {
-        Section sp(yaml, o.node("sphere"), prefix + ".sphere");
-        sp.allow({"center", "radius"});
-        ob.kind = SceneObstacle::Kind::sphere;
-        ob.sphere.center = sp.vector("center", 3);
-        ob.sphere.radius = sp.positive("radius", 0);
-        ob.sphere.friction = ob.friction;
-        WEFT_CHECK(!o.has("inactive_faces"), path, ": '", prefix, ".inactive_faces' applies to meshes only");
-      } else if (o.has("mesh")) {
-        ob.kind = SceneObstacle::Kind::mesh;
-        ob.path = resolve(path, o.get<std::string>("mesh", "a file path"));
-        WEFT_CHECK(fs::exists(ob.path), path, ": '", prefix, ".mesh': file not found: ", ob.path);
-      } else {
-        ob.kind = SceneObstacle::Kind::mesh_sequence;
-        WEFT_CHECK(++sequences == 1, path, ": '", prefix, "': at most one mesh_sequence per scene");
-        ob.path = resolve(path, o.get<std::string>("mesh_sequence", "a file pattern"));
-        for (int f = 0; f <= scene.frames; ++f) {
-          const std::string p = sequence_path(ob.path, f);
-          WEFT_CHECK(fs::exists(p), path, ": '", prefix, ".mesh_sequence': frame ", f,
-                     " not found: ", p, " (frames 0..", scene.frames, " are needed)");
-        }
-      }
-      if (o.has("inactive_faces"))
-        ob.inactive_faces = read_face_list(
-            resolve(path, o.get<std::string>("inactive_faces", "a file path")), path,
-            prefix + ".inactive_faces");
-      scene.obstacles.push_back(std::move(ob));
+// The cloth's starting positions and previous positions: the rest shape unless 'initial' gives
+// OBJ files.
+void read_initial_state(const StrictYaml& yaml, const Section& cloth, Scene& scene) {
+  const std::string& path = scene.file;
+  scene.initial = scene.initial_previous = scene.cloth.rest;
+  if (!cloth.has("initial")) return;
+  // Any state, as network predictions are: stretched, compressed, inside an obstacle.
+  Section init(yaml, cloth.node("initial"), "cloth.initial");
+  init.allow({"positions", "previous"});
+  auto read_state = [&](const char* k) {
+    const std::string key = init.key(k);
+    const std::string file = resolve(path, init.get<std::string>(k, "a file path"));
+    WEFT_CHECK(fs::exists(file), path, ": '", key, "': file not found: ", file);
+    const TriangleMesh m = read_obj(file);
+    WEFT_CHECK(m.num_vertices() == scene.cloth.num_vertices(), path, ": '", key, "': ", file, " has ",
+               m.num_vertices(), " vertices, the cloth has ", scene.cloth.num_vertices());
+    return positions_of(m);
+  };
+  scene.initial = read_state("positions");
+  scene.initial_previous = init.has("previous") ? read_state("previous") : scene.initial;
+}
+
+// The pinned cloth vertices, checked against the cloth's vertex count.
+void read_pins(const Section& cloth, Scene& scene) {
+  const std::string& path = scene.file;
+  if (!cloth.has("pins")) return;
+  const YAML::Node pins = cloth.node("pins");
+  WEFT_CHECK(pins.IsSequence(), path, ": 'cloth.pins' must be a list of vertex ids");
+  for (size_t k = 0; k < pins.size(); ++k) {
+    const int id = cloth.convert<int>(pins[k], "cloth.pins", "a list of integer vertex ids");
+    WEFT_CHECK(id >= 0 && id < scene.cloth.num_vertices(), path, ": 'cloth.pins': vertex ", id,
+               " outside [0, ", scene.cloth.num_vertices(), ")");
+    scene.pins.push_back(id);
+  }
+}
+
+// The 'cloth' section: material, pin stiffness, shape, initial state and pins.
+void read_cloth(const StrictYaml& yaml, const Section& top, Scene& scene) {
+  const std::string& path = scene.file;
+  SimulationSettings& s = scene.settings;
+  WEFT_CHECK(top.has("cloth"), path, ": missing key 'cloth'");
+  Section cloth(yaml, top.node("cloth"), "cloth");
+  cloth.allow({"grid", "mesh", "material", "pins", "pin_stiffness", "initial"});
+  if (cloth.has("material")) read_cloth_material(yaml, cloth.node("material"), "cloth.material", s.material);
+  s.pin_stiffness = cloth.positive("pin_stiffness", s.pin_stiffness);
+  WEFT_CHECK(cloth.has("grid") != cloth.has("mesh"), path,
+             ": 'cloth' needs exactly one of 'grid' or 'mesh'");
+  read_cloth_shape(yaml, cloth, scene);
+  read_initial_state(yaml, cloth, scene);
+  read_pins(cloth, scene);
+}
+
+// One entry of 'obstacles': a sphere, a mesh or a mesh sequence (whose frames 0..frames must
+// all exist), with its friction and inactive faces. `sequences` counts the mesh sequences so far.
+SceneObstacle read_obstacle(const StrictYaml& yaml, const YAML::Node& node, size_t k,
+                            const Scene& scene, int& sequences) {
+  const std::string& path = scene.file;
+  const std::string prefix = "obstacles[" + std::to_string(k) + "]";
+  Section o(yaml, node, prefix);
+  o.allow({"sphere", "mesh", "mesh_sequence", "inactive_faces", "friction"});
+  SceneObstacle ob;
+  ob.friction = o.number_or("friction", ob.friction);
+  WEFT_CHECK(std::isfinite(ob.friction) && ob.friction >= 0, path, ": '", o.key("friction"),
+             "' must be >= 0, got ", ob.friction);
+  const int kinds = o.has("sphere") + o.has("mesh") + o.has("mesh_sequence");
+  WEFT_CHECK(kinds == 1, path, ": '", prefix, "' needs exactly one of sphere, mesh, mesh_sequence");
+  if (o.has("sphere")) {
+    Section sp(yaml, o.node("sphere"), prefix + ".sphere");
+    sp.allow({"center", "radius"});
+    ob.kind = SceneObstacle::Kind::sphere;
+    ob.sphere.center = sp.vector("center", 3);
+    ob.sphere.radius = sp.positive("radius", 0);
+    ob.sphere.friction = ob.friction;
+    WEFT_CHECK(!o.has("inactive_faces"), path, ": '", prefix, ".inactive_faces' applies to meshes only");
+  } else if (o.has("mesh")) {
+    ob.kind = SceneObstacle::Kind::mesh;
+    ob.path = resolve(path, o.get<std::string>("mesh", "a file path"));
+    WEFT_CHECK(fs::exists(ob.path), path, ": '", prefix, ".mesh': file not found: ", ob.path);
+  } else {
+    ob.kind = SceneObstacle::Kind::mesh_sequence;
+    WEFT_CHECK(++sequences == 1, path, ": '", prefix, "': at most one mesh_sequence per scene");
+    ob.path = resolve(path, o.get<std::string>("mesh_sequence", "a file pattern"));
+    for (int f = 0; f <= scene.frames; ++f) {
+      const std::string p = sequence_path(ob.path, f);
+      WEFT_CHECK(fs::exists(p), path, ": '", prefix, ".mesh_sequence': frame ", f,
+                 " not found: ", p, " (frames 0..", scene.frames, " are needed)");
     }
   }
-  if (top.has("collision")) {
-    Section c(yaml, top.node("collision"), "collision");
-    c.allow({"thickness", "stiffness", "friction_velocity"});
-    s.collision_thickness = c.positive("thickness", s.collision_thickness);
-    s.collision_stiffness = c.positive("stiffness", s.collision_stiffness);
-    s.friction_velocity = c.positive("friction_velocity", s.friction_velocity);
-  }
-  if (top.has("solver")) {
-    Section sv(yaml, top.node("solver"), "solver");
-    sv.allow({"max_iterations", "tolerance", "linear_solver", "cholesky"});
-    s.newton.max_iterations = sv.get_or<int>("max_iterations", s.newton.max_iterations, "an integer");
-    WEFT_CHECK(s.newton.max_iterations >= 1, path, ": 'solver.max_iterations' must be >= 1");
-    s.newton.tolerance = sv.positive("tolerance", s.newton.tolerance);
-    const std::string ls = sv.get_or<std::string>("linear_solver", "direct", "a string");
-    WEFT_CHECK(ls == "direct" || ls == "reused_factor", path,
-               ": 'solver.linear_solver' must be direct or reused_factor, got '", ls, "'");
-    s.newton.linear_solver = ls == "direct" ? LinearSolverKind::direct : LinearSolverKind::reused_factor;
-    const std::string ch = sv.get_or<std::string>("cholesky", "automatic", "a string");
-    WEFT_CHECK(ch == "automatic" || ch == "simplicial" || ch == "supernodal", path,
-               ": 'solver.cholesky' must be automatic, simplicial or supernodal, got '", ch, "'");
-    s.newton.cholesky = ch == "simplicial"   ? CholeskyKind::simplicial
-                        : ch == "supernodal" ? CholeskyKind::supernodal
-                                             : CholeskyKind::automatic;
-  }
-  validate(s);
+  if (o.has("inactive_faces"))
+    ob.inactive_faces = read_face_list(
+        resolve(path, o.get<std::string>("inactive_faces", "a file path")), path,
+        prefix + ".inactive_faces");
+  return ob;
+}
+
+// The 'obstacles' list, if any.
+void read_obstacles(const StrictYaml& yaml, const Section& top, Scene& scene) {
+  if (!top.has("obstacles")) return;
+  const YAML::Node list = top.node("obstacles");
+  WEFT_CHECK(list.IsSequence(), scene.file, ": 'obstacles' must be a list");
+  int sequences = 0;
+  for (size_t k = 0; k < list.size(); ++k)
+    scene.obstacles.push_back(read_obstacle(yaml, list[k], k, scene, sequences));
+}
+
+// The 'collision' section, if any: thickness, stiffness and friction velocity.
+void read_collision(const StrictYaml& yaml, const Section& top, SimulationSettings& s) {
+  if (!top.has("collision")) return;
+  Section c(yaml, top.node("collision"), "collision");
+  c.allow({"thickness", "stiffness", "friction_velocity"});
+  s.collision_thickness = c.positive("thickness", s.collision_thickness);
+  s.collision_stiffness = c.positive("stiffness", s.collision_stiffness);
+  s.friction_velocity = c.positive("friction_velocity", s.friction_velocity);
+}
+
+// The 'solver' section, if any: Newton's iterations and tolerance, the linear solver and the
+// Cholesky kind.
+void read_solver(const StrictYaml& yaml, const Section& top, SimulationSettings& s) {
+  if (!top.has("solver")) return;
+  const std::string& path = yaml.file;
+  Section sv(yaml, top.node("solver"), "solver");
+  sv.allow({"max_iterations", "tolerance", "linear_solver", "cholesky"});
+  s.newton.max_iterations = sv.get_or<int>("max_iterations", s.newton.max_iterations, "an integer");
+  WEFT_CHECK(s.newton.max_iterations >= 1, path, ": 'solver.max_iterations' must be >= 1");
+  s.newton.tolerance = sv.positive("tolerance", s.newton.tolerance);
+  const std::string ls = sv.get_or<std::string>("linear_solver", "direct", "a string");
+  WEFT_CHECK(ls == "direct" || ls == "reused_factor", path,
+             ": 'solver.linear_solver' must be direct or reused_factor, got '", ls, "'");
+  s.newton.linear_solver = ls == "direct" ? LinearSolverKind::direct : LinearSolverKind::reused_factor;
+  const std::string ch = sv.get_or<std::string>("cholesky", "automatic", "a string");
+  WEFT_CHECK(ch == "automatic" || ch == "simplicial" || ch == "supernodal", path,
+             ": 'solver.cholesky' must be automatic, simplicial or supernodal, got '", ch, "'");
+  s.newton.cholesky = ch == "simplicial"   ? CholeskyKind::simplicial
+                      : ch == "supernodal" ? CholeskyKind::supernodal
+                                           : CholeskyKind::automatic;
+}
+
+}  // namespace
+
+Scene load_scene(const std::string& path) {
+  WEFT_CHECK(fs::exists(path), path, ": scene file not found");
+  StrictYaml yaml;
+  yaml.file = path;
+  yaml.dir = fs::path(path).parent_path();
+  const YAML::Node root = yaml.parse(read_file_bytes(path));
+  Scene scene;
+  scene.file = path;
+  Section top(yaml, root, "");
+  top.allow({"time_step", "frames", "substeps", "gravity", "cloth", "obstacles", "collision",
+             "solver"});
+  read_timing(top, scene);
+  read_cloth(yaml, top, scene);
+  read_obstacles(yaml, top, scene);
+  read_collision(yaml, top, scene.settings);
+  read_solver(yaml, top, scene.settings);
+  validate(scene.settings);
   return scene;
 }
 

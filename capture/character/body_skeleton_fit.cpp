@@ -372,7 +372,8 @@ namespace {
 struct Fitter {
   const TriangleMesh& body;
   const std::string& what;
-  double H = 0;  // height
+  double H = 0;     // height
+  double step = 0;  // between the sections of a scan (0.002 H)
 
   std::vector<Section> horizontal(double y) const { return slice_mesh(body, Vector3d::UnitY(), y); }
   static bool straddles(const Section& s) { return s.lo.x() < 0 && s.hi.x() > 0; }
@@ -385,6 +386,12 @@ struct Fitter {
       if (straddles(s) && (!best || s.area > best->area)) best = &s;
     if (!best) fail(what, ": no cross-section of the body crosses x = 0 at height ", y);
     return *best;
+  }
+  // The centroid of the midline section at height y, at that height.
+  Vector3d mid(double y) const {
+    Vector3d c = midline(y).centroid;
+    c.y() = y;
+    return c;
   }
   // The side section (not crossing x = 0) on side `sign` closest to `near` (x, z only).
   bool side_section(double y, double sign, const Vector3d& near, double max_dist, Section& out) const {
@@ -420,236 +427,263 @@ std::pair<Vector3d, Vector3d> principal_axis(const std::vector<Vector3d>& pts) {
   return {c, es.eigenvectors().col(2)};
 }
 
-}  // namespace
 
-BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_points, const std::string& what) {
-  if (body.num_vertices() < 100) fail(what, ": the body mesh is too small to fit a skeleton");
-  BodySkeletonFit fit;
-  Fitter fx{body, what};
-  const double ymin = body.V.col(1).minCoeff(), ymax = body.V.col(1).maxCoeff();
-  if (std::abs(ymin) > 1e-9 * (ymax - ymin) + 1e-12) fail(what, ": the body's feet must be on y = 0");
-  const double H = fx.H = fit.height = ymax - ymin;
-  const double step = 0.002 * H;
-  auto& J = fit.joints;
-  auto& M = fit.markers;
+// ---- the stages of the fit
 
-  // Crotch: the lowest height (above the knees) where a section crosses the midline.
-  fit.crotch_y = -1;
-  for (double y = 0.30 * H; y < 0.70 * H; y += step) {
+std::string side_prefix(double sign) { return sign > 0 ? "l_" : "r_"; }
+
+// Crotch: the lowest height (above the knees) where a section crosses the midline.
+double find_crotch(const Fitter& fx) {
+  const double H = fx.H;
+  for (double y = 0.30 * H; y < 0.70 * H; y += fx.step) {
     bool mid = false;
     for (const Section& s : fx.horizontal(y)) mid = mid || Fitter::straddles(s);
-    if (mid) {
-      fit.crotch_y = y;
-      break;
-    }
+    if (mid) return y;
   }
-  if (fit.crotch_y < 0) fail(what, ": no crotch found between 0.3 and 0.7 of the height (legs not apart?)");
+  fail(fx.what, ": no crotch found between 0.3 and 0.7 of the height (legs not apart?)");
+}
 
-  // Armpits: going down from the shoulders, the first height where both arms are separate
-  // sections next to the torso.
-  fit.armpit_y = -1;
-  for (double y = 0.84 * H; y > fit.crotch_y + 0.1 * H; y -= step) {
+// Armpits: going down from the shoulders, the first height where both arms are separate
+// sections next to the torso.
+double find_armpits(const Fitter& fx, double crotch_y) {
+  const double H = fx.H;
+  for (double y = 0.84 * H; y > crotch_y + 0.1 * H; y -= fx.step) {
     bool left = false, right = false;
     for (const Section& s : fx.horizontal(y)) {
       if (Fitter::straddles(s)) continue;
       left = left || s.centroid.x() > 0;
       right = right || s.centroid.x() < 0;
     }
-    if (left && right) {
-      fit.armpit_y = y;
-      break;
-    }
+    if (left && right) return y;
   }
-  if (fit.armpit_y < 0) fail(what, ": no armpits found (arms not away from the torso?)");
+  fail(fx.what, ": no armpits found (arms not away from the torso?)");
+}
 
-  // Neck: the narrowest midline section between the shoulders and the head top.
-  {
-    double best = std::numeric_limits<double>::infinity();
-    for (double y = fit.armpit_y + 0.04 * H; y < 0.95 * H; y += step) {
-      const Section s = fx.midline(y);
-      if (s.area < best) best = s.area, fit.neck_y = y;
-    }
+// The height of the narrowest midline section in [y0, y1), or `none` if there is no step
+// in that range.
+double narrowest_midline(const Fitter& fx, double y0, double y1, double none) {
+  double best = std::numeric_limits<double>::infinity(), at = none;
+  for (double y = y0; y < y1; y += fx.step) {
+    const Section s = fx.midline(y);
+    if (s.area < best) best = s.area, at = y;
   }
-  const double hip_y = fit.crotch_y + 0.05 * H;
-  auto mid = [&](double y) {
-    Vector3d c = fx.midline(y).centroid;
-    c.y() = y;
-    return c;
-  };
-  J["hips"] = mid(hip_y);
-  J["neck"] = mid(fit.neck_y - 0.03 * H);
+  return at;
+}
+
+// The midline joints: hips, spine, chest, neck, head and the head's end site.
+void fit_torso(const Fitter& fx, double hip_y, double ymax, BodySkeletonFit& fit) {
+  const double H = fx.H;
+  auto& J = fit.joints;
+  J["hips"] = fx.mid(hip_y);
+  J["neck"] = fx.mid(fit.neck_y - 0.03 * H);
   // The head joint sits above the mid-neck: a section at that height may take in the chin
   // and move its centroid forward, out of the neck.
-  J["head"] = mid(fit.neck_y) + Vector3d(0, 0.02 * H, 0);
-  J["spine"] = mid(hip_y + 0.35 * (J["neck"].y() - hip_y));
-  J["chest"] = mid(hip_y + 0.70 * (J["neck"].y() - hip_y));
-  {
-    Vector3d top = mid(ymax - 0.05 * H);
-    top.y() = ymax - 0.02 * H;
-    J["head_end"] = top;
-  }
-  // Waist: the narrowest torso section between the hips and the chest (for garments).
-  {
-    double best = std::numeric_limits<double>::infinity();
-    for (double y = hip_y; y < J["chest"].y(); y += step) {
-      const Section s = fx.midline(y);
-      if (s.area < best) best = s.area, fit.waist_y = y;
-    }
-  }
+  J["head"] = fx.mid(fit.neck_y) + Vector3d(0, 0.02 * H, 0);
+  J["spine"] = fx.mid(hip_y + 0.35 * (J["neck"].y() - hip_y));
+  J["chest"] = fx.mid(hip_y + 0.70 * (J["neck"].y() - hip_y));
+  Vector3d top = fx.mid(ymax - 0.05 * H);
+  top.y() = ymax - 0.02 * H;
+  J["head_end"] = top;
+}
 
-  for (const double sign : {1.0, -1.0}) {
-    const std::string p = sign > 0 ? "l_" : "r_";
-    // ---- legs: centroids of the leg sections below the crotch.
-    Section leg;
-    Vector3d guess(sign * 0.06 * H, 0, J["hips"].z());
-    if (!fx.side_section(fit.crotch_y - 0.03 * H, sign, guess, 0.15 * H, leg))
-      fail(what, ": no ", p, "leg section below the crotch");
-    J[p + "hip"] = Vector3d(leg.centroid.x(), hip_y, leg.centroid.z());
-    // Knee: the narrowest leg section between 0.24 and 0.33 of the height.
-    auto narrowest_leg = [&](double y0, double y1, Vector3d near) {
-      double best = std::numeric_limits<double>::infinity();
-      Vector3d at_best = near;
-      for (double y = y1; y >= y0; y -= step) {
-        Section s;
-        if (!fx.side_section(y, sign, near, 0.08 * H, s)) continue;
-        near = s.centroid;
-        if (s.area < best) best = s.area, at_best = s.centroid, at_best.y() = y;
-      }
-      if (!std::isfinite(best)) fail(what, ": no ", p, "leg sections between heights ", y0, " and ", y1);
-      return at_best;
-    };
-    J[p + "knee"] = narrowest_leg(0.24 * H, 0.33 * H, leg.centroid);
-    // Ankle: on the line from the knee through the narrowest shin section, at 0.045 H
-    // (the malleoli); the section itself would be pulled forward by the foot.
-    const Vector3d shin = narrowest_leg(0.07 * H, 0.14 * H, J[p + "knee"]);
-    const Vector3d& knee = J[p + "knee"];
-    const double ankle_y = 0.045 * H;
-    J[p + "ankle"] = knee + (shin - knee) * (knee.y() - ankle_y) / (knee.y() - shin.y());
-    const Vector3d ankle = J[p + "ankle"];
-    // Foot: vertices below 1.3 × ankle height on this side.
-    std::vector<int> foot;
-    for (int v = 0; v < body.num_vertices(); ++v)
-      if (body.V(v, 1) < 1.3 * ankle_y && body.V(v, 0) * sign > 0 && std::abs(body.V(v, 0) - ankle.x()) < 0.1 * H)
-        foot.push_back(v);
-    if (foot.size() < 10) fail(what, ": no ", p, "foot found below the ankle");
-    double heel_z = std::numeric_limits<double>::infinity(), tip_z = -heel_z;
-    for (int v : foot) heel_z = std::min(heel_z, body.V(v, 2)), tip_z = std::max(tip_z, body.V(v, 2));
-    const double foot_len = tip_z - heel_z;
+// The narrowest section of the leg on side `sign` between heights y0 and y1, followed
+// upwards from y1 starting near `near`; its centroid at its height.
+Vector3d narrowest_leg(const Fitter& fx, double sign, double y0, double y1, Vector3d near) {
+  double best = std::numeric_limits<double>::infinity();
+  Vector3d at_best = near;
+  for (double y = y1; y >= y0; y -= fx.step) {
     Section s;
-    // Toe joint (ball of the foot) at 75 % of the foot length, toe end at 90 %.
-    const Vector3d ball_guess(ankle.x(), 0.3 * ankle_y, heel_z + 0.75 * foot_len);
-    if (!fx.section_near(Vector3d::UnitZ(), ball_guess, 0.08 * H, s))
-      fail(what, ": no ", p, "foot section at the ball of the foot");
-    J[p + "toe"] = s.centroid;
-    const Vector3d tip_guess(s.centroid.x(), s.centroid.y(), heel_z + 0.92 * foot_len);
-    if (!fx.section_near(Vector3d::UnitZ(), tip_guess, 0.08 * H, s))
-      fail(what, ": no ", p, "foot section at the toes");
-    J[p + "toe_end"] = s.centroid;
-    // Markers: the heel (rearmost foot vertices), big and small toe (frontmost vertices on
-    // the inner and outer side of the toe joint).
-    Vector3d heel = Vector3d::Zero();
-    int n_heel = 0;
-    for (int v : foot)
-      if (body.V(v, 2) < heel_z + 0.005 * H) heel += body.V.row(v).transpose(), ++n_heel;
-    M[p + "heel"] = heel / n_heel;
-    double outer = 0;
-    for (int v : foot)
-      if (body.V(v, 2) > J[p + "toe"].z()) outer = std::max(outer, sign * (body.V(v, 0) - J[p + "toe"].x()));
-    int big = -1, small = -1;
-    for (int v : foot) {
-      const double lateral = sign * (body.V(v, 0) - J[p + "toe"].x());
-      if (lateral <= 0 && (big < 0 || body.V(v, 2) > body.V(big, 2))) big = v;
-      if (lateral >= 0.6 * outer && (small < 0 || body.V(v, 2) > body.V(small, 2))) small = v;
-    }
-    if (big < 0 || small < 0) fail(what, ": cannot place the ", p, "toe markers");
-    M[p + "big_toe"] = body.V.row(big).transpose();
-    M[p + "small_toe"] = body.V.row(small).transpose();
-
-    // ---- arms: follow the arm sections down from the armpit.
-    std::vector<Vector3d> arm;
-    Section a;
-    {
-      double best = -1;
-      for (const Section& sec : fx.horizontal(fit.armpit_y - step))
-        if (!Fitter::straddles(sec) && sec.centroid.x() * sign > best) best = sec.centroid.x() * sign, a = sec;
-      if (best < 0) fail(what, ": no ", p, "arm section below the armpit");
-    }
-    arm.push_back(a.centroid);
-    for (double y = fit.armpit_y - 2 * step; y > 0.2 * H; y -= step) {
-      Section next;
-      // Each section must continue the last one (within 0.03 H): the thigh, far inside
-      // the hand, never qualifies, and the arm ends below the finger tips.
-      if (!fx.side_section(y, sign, arm.back(), 0.03 * H, next)) break;
-      arm.push_back(next.centroid);
-    }
-    if (arm.size() < 20) fail(what, ": the ", p, "arm is too short to fit (", arm.size(), " sections)");
-    auto [centre, dir] = principal_axis(arm);
-    if (dir.y() > 0) dir = -dir;  // from the shoulder down to the hand
-    // Hand tip: the farthest vertex along the axis among vertices near the axis line.
-    double tip = -std::numeric_limits<double>::infinity();
-    for (int v = 0; v < body.num_vertices(); ++v) {
-      const Vector3d q = body.V.row(v).transpose() - centre;
-      if (body.V(v, 0) * sign > 0 && (q - q.dot(dir) * dir).norm() < 0.06 * H) tip = std::max(tip, q.dot(dir));
-    }
-    // Shoulder: 0.04 H above the armpit, on the upper arm's axis (the first third of the
-    // sections) across, and above the first arm section front to back (the whole arm's
-    // axis leans forward to the hands).
-    const std::vector<Vector3d> upper(arm.begin(), arm.begin() + static_cast<long>(arm.size() / 3));
-    auto [ucentre, udir] = principal_axis(upper);
-    if (udir.y() > 0) udir = -udir;
-    Vector3d shoulder = ucentre + (fit.armpit_y + 0.04 * H - ucentre.y()) / udir.y() * udir;
-    shoulder.z() = arm.front().z();
-    const double t_sh = (shoulder - centre).dot(dir);
-    J[p + "shoulder"] = shoulder;
-    const double L = tip - t_sh;  // shoulder to finger tip along the axis
-    // Stations: sections perpendicular to the axis, each near the previous one's centroid.
-    std::vector<std::pair<double, Section>> stations;
-    Vector3d near = shoulder;
-    for (int i = 20; i <= 95; ++i) {
-      const double sdist = L * i / 100.0;
-      const Vector3d q = shoulder + sdist * dir;
-      Section sec;
-      if (!fx.section_near(dir, Vector3d(q + (near - q) - (near - q).dot(dir) * dir), 0.05 * H, sec)) continue;
-      near = sec.centroid;
-      stations.emplace_back(sdist, sec);
-    }
-    if (stations.size() < 30) fail(what, ": cannot follow the ", p, "arm (", stations.size(), " sections)");
-    // Wrist: the narrowest section in 62–85 % of the length; elbow at the upper arm's
-    // share of the shoulder–wrist distance (0.186 : 0.146 of the height, Drillis–Contini).
-    double best = std::numeric_limits<double>::infinity(), s_wrist = 0;
-    for (const auto& [sd, sec] : stations)
-      if (sd > 0.62 * L && sd < 0.85 * L && sec.area < best) best = sec.area, s_wrist = sd, J[p + "wrist"] = sec.centroid;
-    if (!std::isfinite(best)) fail(what, ": no ", p, "wrist section");
-    auto station_at = [&](double sd) {
-      const auto* b = &stations.front();
-      for (const auto& st : stations)
-        if (std::abs(st.first - sd) < std::abs(b->first - sd)) b = &st;
-      return b->second.centroid;
-    };
-    J[p + "elbow"] = station_at(s_wrist * 0.186 / (0.186 + 0.146));
-    J[p + "hand_end"] = station_at(s_wrist + 0.6 * (L - s_wrist));
+    if (!fx.side_section(y, sign, near, 0.08 * fx.H, s)) continue;
+    near = s.centroid;
+    if (s.area < best) best = s.area, at_best = s.centroid, at_best.y() = y;
   }
+  if (!std::isfinite(best)) fail(fx.what, ": no ", side_prefix(sign), "leg sections between heights ", y0, " and ", y1);
+  return at_best;
+}
 
-  // Clavicles: the sternoclavicular joints, a fifth of the way to the shoulders.
+// A leg's hip, knee and ankle on side `sign` (+1 left, -1 right): centroids of the leg
+// sections below the crotch.
+void fit_leg(const Fitter& fx, double sign, double hip_y, BodySkeletonFit& fit) {
+  const double H = fx.H;
+  const std::string p = side_prefix(sign);
+  auto& J = fit.joints;
+  Section leg;
+  Vector3d guess(sign * 0.06 * H, 0, J["hips"].z());
+  if (!fx.side_section(fit.crotch_y - 0.03 * H, sign, guess, 0.15 * H, leg))
+    fail(fx.what, ": no ", p, "leg section below the crotch");
+  J[p + "hip"] = Vector3d(leg.centroid.x(), hip_y, leg.centroid.z());
+  // Knee: the narrowest leg section between 0.24 and 0.33 of the height.
+  J[p + "knee"] = narrowest_leg(fx, sign, 0.24 * H, 0.33 * H, leg.centroid);
+  // Ankle: on the line from the knee through the narrowest shin section, at 0.045 H
+  // (the malleoli); the section itself would be pulled forward by the foot.
+  const Vector3d shin = narrowest_leg(fx, sign, 0.07 * H, 0.14 * H, J[p + "knee"]);
+  const Vector3d& knee = J[p + "knee"];
+  const double ankle_y = 0.045 * H;
+  J[p + "ankle"] = knee + (shin - knee) * (knee.y() - ankle_y) / (knee.y() - shin.y());
+}
+
+// A foot's toe joint and toe end on side `sign`, and its heel and toe markers.
+void fit_foot(const Fitter& fx, double sign, BodySkeletonFit& fit) {
+  const TriangleMesh& body = fx.body;
+  const double H = fx.H;
+  const std::string p = side_prefix(sign);
+  auto& J = fit.joints;
+  auto& M = fit.markers;
+  const double ankle_y = 0.045 * H;
+  const Vector3d ankle = J[p + "ankle"];
+  // Foot: vertices below 1.3 × ankle height on this side.
+  std::vector<int> foot;
+  for (int v = 0; v < body.num_vertices(); ++v)
+    if (body.V(v, 1) < 1.3 * ankle_y && body.V(v, 0) * sign > 0 && std::abs(body.V(v, 0) - ankle.x()) < 0.1 * H)
+      foot.push_back(v);
+  if (foot.size() < 10) fail(fx.what, ": no ", p, "foot found below the ankle");
+  double heel_z = std::numeric_limits<double>::infinity(), tip_z = -heel_z;
+  for (int v : foot) heel_z = std::min(heel_z, body.V(v, 2)), tip_z = std::max(tip_z, body.V(v, 2));
+  const double foot_len = tip_z - heel_z;
+  Section s;
+  // Toe joint (ball of the foot) at 75 % of the foot length, toe end at 90 %.
+  const Vector3d ball_guess(ankle.x(), 0.3 * ankle_y, heel_z + 0.75 * foot_len);
+  if (!fx.section_near(Vector3d::UnitZ(), ball_guess, 0.08 * H, s))
+    fail(fx.what, ": no ", p, "foot section at the ball of the foot");
+  J[p + "toe"] = s.centroid;
+  const Vector3d tip_guess(s.centroid.x(), s.centroid.y(), heel_z + 0.92 * foot_len);
+  if (!fx.section_near(Vector3d::UnitZ(), tip_guess, 0.08 * H, s))
+    fail(fx.what, ": no ", p, "foot section at the toes");
+  J[p + "toe_end"] = s.centroid;
+  // Markers: the heel (rearmost foot vertices), big and small toe (frontmost vertices on
+  // the inner and outer side of the toe joint).
+  Vector3d heel = Vector3d::Zero();
+  int n_heel = 0;
+  for (int v : foot)
+    if (body.V(v, 2) < heel_z + 0.005 * H) heel += body.V.row(v).transpose(), ++n_heel;
+  M[p + "heel"] = heel / n_heel;
+  double outer = 0;
+  for (int v : foot)
+    if (body.V(v, 2) > J[p + "toe"].z()) outer = std::max(outer, sign * (body.V(v, 0) - J[p + "toe"].x()));
+  int big = -1, small = -1;
+  for (int v : foot) {
+    const double lateral = sign * (body.V(v, 0) - J[p + "toe"].x());
+    if (lateral <= 0 && (big < 0 || body.V(v, 2) > body.V(big, 2))) big = v;
+    if (lateral >= 0.6 * outer && (small < 0 || body.V(v, 2) > body.V(small, 2))) small = v;
+  }
+  if (big < 0 || small < 0) fail(fx.what, ": cannot place the ", p, "toe markers");
+  M[p + "big_toe"] = body.V.row(big).transpose();
+  M[p + "small_toe"] = body.V.row(small).transpose();
+}
+
+// The centroids of the arm's horizontal sections on side `sign`, followed down from the
+// armpit.
+std::vector<Vector3d> arm_sections(const Fitter& fx, double sign, double armpit_y) {
+  const std::string p = side_prefix(sign);
+  std::vector<Vector3d> arm;
+  Section a;
+  double best = -1;
+  for (const Section& sec : fx.horizontal(armpit_y - fx.step))
+    if (!Fitter::straddles(sec) && sec.centroid.x() * sign > best) best = sec.centroid.x() * sign, a = sec;
+  if (best < 0) fail(fx.what, ": no ", p, "arm section below the armpit");
+  arm.push_back(a.centroid);
+  for (double y = armpit_y - 2 * fx.step; y > 0.2 * fx.H; y -= fx.step) {
+    Section next;
+    // Each section must continue the last one (within 0.03 H): the thigh, far inside
+    // the hand, never qualifies, and the arm ends below the finger tips.
+    if (!fx.side_section(y, sign, arm.back(), 0.03 * fx.H, next)) break;
+    arm.push_back(next.centroid);
+  }
+  if (arm.size() < 20) fail(fx.what, ": the ", p, "arm is too short to fit (", arm.size(), " sections)");
+  return arm;
+}
+
+// Stations along the arm on side `sign`: sections perpendicular to the axis `dir`, from
+// 20 % to 95 % of the length L from the shoulder, each near the previous one's centroid;
+// with their distances from the shoulder.
+std::vector<std::pair<double, Section>> arm_stations(const Fitter& fx, double sign, const Vector3d& shoulder,
+                                                     const Vector3d& dir, double L) {
+  std::vector<std::pair<double, Section>> stations;
+  Vector3d near = shoulder;
+  for (int i = 20; i <= 95; ++i) {
+    const double sdist = L * i / 100.0;
+    const Vector3d q = shoulder + sdist * dir;
+    Section sec;
+    if (!fx.section_near(dir, Vector3d(q + (near - q) - (near - q).dot(dir) * dir), 0.05 * fx.H, sec)) continue;
+    near = sec.centroid;
+    stations.emplace_back(sdist, sec);
+  }
+  if (stations.size() < 30)
+    fail(fx.what, ": cannot follow the ", side_prefix(sign), "arm (", stations.size(), " sections)");
+  return stations;
+}
+
+// An arm's shoulder, elbow, wrist and hand end on side `sign`: on the arm's axis, from
+// sections across it.
+void fit_arm(const Fitter& fx, double sign, BodySkeletonFit& fit) {
+  const TriangleMesh& body = fx.body;
+  const double H = fx.H;
+  const std::string p = side_prefix(sign);
+  auto& J = fit.joints;
+  const std::vector<Vector3d> arm = arm_sections(fx, sign, fit.armpit_y);
+  auto [centre, dir] = principal_axis(arm);
+  if (dir.y() > 0) dir = -dir;  // from the shoulder down to the hand
+  // Hand tip: the farthest vertex along the axis among vertices near the axis line.
+  double tip = -std::numeric_limits<double>::infinity();
+  for (int v = 0; v < body.num_vertices(); ++v) {
+    const Vector3d q = body.V.row(v).transpose() - centre;
+    if (body.V(v, 0) * sign > 0 && (q - q.dot(dir) * dir).norm() < 0.06 * H) tip = std::max(tip, q.dot(dir));
+  }
+  // Shoulder: 0.04 H above the armpit, on the upper arm's axis (the first third of the
+  // sections) across, and above the first arm section front to back (the whole arm's
+  // axis leans forward to the hands).
+  const std::vector<Vector3d> upper(arm.begin(), arm.begin() + static_cast<long>(arm.size() / 3));
+  auto [ucentre, udir] = principal_axis(upper);
+  if (udir.y() > 0) udir = -udir;
+  Vector3d shoulder = ucentre + (fit.armpit_y + 0.04 * H - ucentre.y()) / udir.y() * udir;
+  shoulder.z() = arm.front().z();
+  const double t_sh = (shoulder - centre).dot(dir);
+  J[p + "shoulder"] = shoulder;
+  const double L = tip - t_sh;  // shoulder to finger tip along the axis
+  const std::vector<std::pair<double, Section>> stations = arm_stations(fx, sign, shoulder, dir, L);
+  // Wrist: the narrowest section in 62–85 % of the length; elbow at the upper arm's
+  // share of the shoulder–wrist distance (0.186 : 0.146 of the height, Drillis–Contini).
+  double best = std::numeric_limits<double>::infinity(), s_wrist = 0;
+  for (const auto& [sd, sec] : stations)
+    if (sd > 0.62 * L && sd < 0.85 * L && sec.area < best) best = sec.area, s_wrist = sd, J[p + "wrist"] = sec.centroid;
+  if (!std::isfinite(best)) fail(fx.what, ": no ", p, "wrist section");
+  auto station_at = [&](double sd) {
+    const auto* b = &stations.front();
+    for (const auto& st : stations)
+      if (std::abs(st.first - sd) < std::abs(b->first - sd)) b = &st;
+    return b->second.centroid;
+  };
+  J[p + "elbow"] = station_at(s_wrist * 0.186 / (0.186 + 0.146));
+  J[p + "hand_end"] = station_at(s_wrist + 0.6 * (L - s_wrist));
+}
+
+// Clavicles: the sternoclavicular joints, a fifth of the way to the shoulders.
+void fit_clavicles(const Fitter& fx, BodySkeletonFit& fit) {
+  auto& J = fit.joints;
   for (const double sign : {1.0, -1.0}) {
-    const std::string p = sign > 0 ? "l_" : "r_";
+    const std::string p = side_prefix(sign);
     const Vector3d sh = J[p + "shoulder"];
-    const Vector3d c = mid(sh.y());
+    const Vector3d c = fx.mid(sh.y());
     J[p + "clavicle"] = Vector3d(c.x() + 0.2 * (sh.x() - c.x()), sh.y(), c.z());
   }
+}
 
-  // Face markers. Nose: the frontmost head vertex; eyes: the front of each eyeball (or,
-  // without eyeballs, 3.5 cm up and 3.2 cm aside from the nose, scaled to the height);
-  // ears: the outermost head vertices around eye height.
+// Face markers. Nose: the frontmost head vertex; eyes: the front of each eyeball (or,
+// without eyeballs, 3.5 cm up and 3.2 cm aside from the nose, scaled to the height);
+// ears: the outermost head vertices around eye height.
+void fit_face_markers(const Fitter& fx, const Vertices& eye_points, BodySkeletonFit& fit) {
+  const TriangleMesh& body = fx.body;
+  const double H = fx.H;
+  auto& M = fit.markers;
   const double head_lo = fit.neck_y + 0.02 * H;
   int nose = -1;
   for (int v = 0; v < body.num_vertices(); ++v)
     if (body.V(v, 1) > head_lo && std::abs(body.V(v, 0)) < 0.02 * H && (nose < 0 || body.V(v, 2) > body.V(nose, 2)))
       nose = v;
-  if (nose < 0) fail(what, ": no head vertices above the neck");
+  if (nose < 0) fail(fx.what, ": no head vertices above the neck");
   M["nose"] = body.V.row(nose).transpose();
   for (const double sign : {1.0, -1.0}) {
-    const std::string p = sign > 0 ? "l_" : "r_";
+    const std::string p = side_prefix(sign);
     Vector3d eye = Vector3d::Zero();
     int n = 0;
     double front = -std::numeric_limits<double>::infinity();
@@ -668,19 +702,24 @@ BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_
       if (std::abs(body.V(v, 1) - eye.y()) > 0.02 * H || body.V(v, 2) > eye.z()) continue;
       if (ear < 0 || sign * body.V(v, 0) > sign * body.V(ear, 0)) ear = v;
     }
-    if (ear < 0) fail(what, ": no ", p, "ear found");
+    if (ear < 0) fail(fx.what, ": no ", p, "ear found");
     M[p + "ear"] = body.V.row(ear).transpose();
   }
+}
 
-  // Every joint must lie inside the body.
+// Every joint must lie inside the body.
+void check_joints_inside(const Fitter& fx, const std::map<std::string, Vector3d>& J) {
   std::string outside;
   for (const auto& [name, q] : J)
-    if (!inside_mesh(body.V, body.F, q))
+    if (!inside_mesh(fx.body.V, fx.body.F, q))
       outside += " " + name + " (" + std::to_string(q.x()) + ", " + std::to_string(q.y()) + ", " +
                  std::to_string(q.z()) + ")";
-  if (!outside.empty()) fail(what, ": fitted joints outside the body:", outside);
+  if (!outside.empty()) fail(fx.what, ": fitted joints outside the body:", outside);
+}
 
-  fit.skeleton = build_body_skeleton(J, M);
+// The BODY_25 keypoints as joints and markers of the fitted skeleton; every one must be
+// mapped.
+void map_body25(BodySkeletonFit& fit, const std::string& what) {
   const Skeleton& s = fit.skeleton;
   auto j = [&](const char* n) { return LandmarkSource{{s.joint_index(n)}, {}}; };
   auto mk = [&](const char* n) { return LandmarkSource{{}, {s.marker_index(n)}}; };
@@ -707,6 +746,37 @@ BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_
   for (int k = 0; k < kBody25Count; ++k)
     if (b[k].empty() || (b[k].joints.size() && b[k].joints[0] < 0) || (b[k].markers.size() && b[k].markers[0] < 0))
       fail(what, ": BODY_25 keypoint ", kBody25Names[k], " is not mapped");
+}
+}  // namespace
+
+BodySkeletonFit fit_body_skeleton(const TriangleMesh& body, const Vertices& eye_points, const std::string& what) {
+  if (body.num_vertices() < 100) fail(what, ": the body mesh is too small to fit a skeleton");
+  BodySkeletonFit fit;
+  Fitter fx{body, what};
+  const double ymin = body.V.col(1).minCoeff(), ymax = body.V.col(1).maxCoeff();
+  if (std::abs(ymin) > 1e-9 * (ymax - ymin) + 1e-12) fail(what, ": the body's feet must be on y = 0");
+  const double H = fx.H = fit.height = ymax - ymin;
+  fx.step = 0.002 * H;
+
+  fit.crotch_y = find_crotch(fx);
+  fit.armpit_y = find_armpits(fx, fit.crotch_y);
+  // Neck: the narrowest midline section between the shoulders and the head top.
+  fit.neck_y = narrowest_midline(fx, fit.armpit_y + 0.04 * H, 0.95 * H, fit.neck_y);
+  const double hip_y = fit.crotch_y + 0.05 * H;
+  fit_torso(fx, hip_y, ymax, fit);
+  // Waist: the narrowest torso section between the hips and the chest (for garments).
+  fit.waist_y = narrowest_midline(fx, hip_y, fit.joints["chest"].y(), fit.waist_y);
+  for (const double sign : {1.0, -1.0}) {
+    fit_leg(fx, sign, hip_y, fit);
+    fit_foot(fx, sign, fit);
+    fit_arm(fx, sign, fit);
+  }
+  fit_clavicles(fx, fit);
+  fit_face_markers(fx, eye_points, fit);
+  check_joints_inside(fx, fit.joints);
+
+  fit.skeleton = build_body_skeleton(fit.joints, fit.markers);
+  map_body25(fit, what);
   return fit;
 }
 

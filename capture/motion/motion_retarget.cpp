@@ -294,6 +294,243 @@ Resolved resolve(const BvhMotion& motion, const RetargetMapping& m, const Skelet
   return r;
 }
 
+// ----------------------------------------------------------------- retargeting stages
+
+// The output times (source seconds): the clip window at the output rate.
+struct OutputTimes {
+  std::vector<double> times;
+  double fps = 0;
+};
+
+OutputTimes output_times(const BvhMotion& motion, const RetargetOptions& o) {
+  const double end = o.end_s < 0 ? motion.duration_s() : std::min(o.end_s, motion.duration_s());
+  if (o.start_s < 0 || o.start_s > end) fail("retarget: clip window [", o.start_s, ", ", end, "] s is empty");
+  OutputTimes out;
+  out.fps = o.fps > 0 ? o.fps : 1.0 / motion.frame_time_s;
+  out.times = resample_times(end - o.start_s, out.fps);
+  for (double& t : out.times) t += o.start_s;
+  return out;
+}
+
+// Bone lengths of the source's zero pose and the character's rest pose; a bone of zero
+// length in either is an error.
+struct BoneLengths {
+  double source_m = 0, target_m = 0;  // metres, summed over the joint-to-joint bones
+  double target_units = 0;            // character units, summed over all bones
+};
+
+BoneLengths bone_lengths(const Resolved& res, const RetargetMapping& m, const Skeleton& s,
+                         const Transforms& rest, const BvhTransforms& zero, double metres_per_unit) {
+  const std::string file = display_name(m.file);
+  BoneLengths out;
+  for (const RetargetBone& b : res.bones) {
+    const double ls = (zero[b.source_to].translation() - zero[b.source_from].translation()).norm();
+    const double lt = (rest[b.target_to].translation() - rest[b.target_from].translation()).norm();
+    if (!(ls > 1e-9)) fail(file, ": bone '", b.name, "' has zero length in the source skeleton");
+    if (!(lt > 1e-9))
+      fail(file, ": bone '", b.name, "' has zero length in the character (",
+           s.joints[b.target_from].name, " and ", s.joints[b.target_to].name, " coincide)");
+    const bool extra = std::any_of(m.extra_bones.begin(), m.extra_bones.end(), [&](const RetargetBoneSpec& e) {
+      return e.source_from + "->" + e.source_to == b.name;
+    });
+    if (!extra) {
+      out.source_m += ls * m.source_metres_per_unit;
+      out.target_m += lt * metres_per_unit;
+    }
+    out.target_units += lt;
+  }
+  return out;
+}
+
+// The bones with their elevation offsets: a bone ending at a rest_elevation joint keeps the
+// character's rest elevation where the source has its zero-pose elevation.
+std::vector<RetargetBone> with_rest_elevation(std::vector<RetargetBone> bones, const BvhMotion& motion,
+                                              const RetargetMapping& m, const Transforms& rest,
+                                              const BvhTransforms& zero) {
+  const int up = m.up_axis;
+  for (RetargetBone& b : bones) {
+    const std::string& end = motion.joints[b.source_to].name;
+    if (std::find(m.rest_elevation.begin(), m.rest_elevation.end(), end) == m.rest_elevation.end()) continue;
+    const Eigen::Vector3d ds = (m.source_to_target * (zero[b.source_to].translation() - zero[b.source_from].translation())).normalized();
+    const Eigen::Vector3d dc = (rest[b.target_to].translation() - rest[b.target_from].translation()).normalized();
+    b.elevation_offset = std::asin(std::clamp(dc(up), -1.0, 1.0)) - std::asin(std::clamp(ds(up), -1.0, 1.0));
+  }
+  return bones;
+}
+
+// The heights of the mapped joints: the source's in the first output frame (metres), the
+// character's at rest (units).
+void measure_heights(const Resolved& res, const std::vector<Eigen::Vector3d>& first, const Transforms& rest,
+                     int up, RetargetResult& out) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int a : res.source_mapped) lo = std::min(lo, first[a](up)), hi = std::max(hi, first[a](up));
+  out.source_height_m = hi - lo;
+  lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int b : res.target_mapped) lo = std::min(lo, rest[b].translation()(up)), hi = std::max(hi, rest[b].translation()(up));
+  out.target_height = hi - lo;
+}
+
+// The source's floor (metres): the mapping's, or else the median over the output frames of
+// the lowest mapped joint.
+double source_floor(const Resolved& res, const RetargetMapping& m,
+                    const std::vector<std::vector<Eigen::Vector3d>>& src) {
+  if (!std::isnan(m.source_floor)) return m.source_floor * m.source_metres_per_unit;
+  const int F = static_cast<int>(src.size());
+  std::vector<double> lows(F);
+  for (int f = 0; f < F; ++f) {
+    double low = std::numeric_limits<double>::infinity();
+    for (int a : res.source_mapped) low = std::min(low, src[f][a](m.up_axis));
+    lows[f] = low;
+  }
+  std::nth_element(lows.begin(), lows.begin() + F / 2, lows.end());
+  return lows[F / 2];
+}
+
+// The feet of both skeletons: the character's floor, and how far each skeleton's feet are
+// above their standing heights.
+class Feet {
+ public:
+  Feet(const Resolved& res, const RetargetMapping& m, const Skeleton& s, const Transforms& rest,
+       const BvhTransforms& zero, double target_height)
+      : s_(s), up_(m.up_axis) {
+    for (const std::string& n : m.floor_markers) {
+      const int k = s.marker_index(n);
+      if (k < 0) fail(display_name(m.file), ": floor marker '", n, "' is not a marker of the skeleton");
+      floor_markers_.push_back(k);
+    }
+    zero_pose_ = forward_kinematics(s, Eigen::VectorXd::Zero(s.num_dofs()));
+    // The character's lowest foot point: mapped joints and floor markers (character units).
+    target_floor_ = std::numeric_limits<double>::infinity();
+    for (int b : res.target_mapped) target_floor_ = std::min(target_floor_, rest[b].translation()(up_));
+    for (int mk : floor_markers_) target_floor_ = std::min(target_floor_, marker_height(rest, mk));
+    // Feet for the floor: mapped joints near the bottom of each skeleton in its standing
+    // pose (within 15% of its height: feet, not hands), and the floor markers. Each keeps its
+    // own standing height, so a heel strike lowers the heel to its standing height, not to
+    // the toes' height.
+    for (int b : res.target_mapped)
+      if (rest[b].translation()(up_) <= target_floor_ + 0.15 * target_height)
+        target_feet_.emplace_back(b, rest[b].translation()(up_));
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int a : res.source_mapped) {
+      const double h = (m.source_to_target * zero[a].translation())(up_);
+      lo = std::min(lo, h), hi = std::max(hi, h);
+    }
+    for (int a : res.source_mapped) {
+      const double h = (m.source_to_target * zero[a].translation())(up_);
+      if (h <= lo + 0.15 * (hi - lo)) source_feet_.emplace_back(a, (h - lo) * m.source_metres_per_unit);
+    }
+    for (int mk : floor_markers_) marker_rest_.push_back(marker_height(rest, mk));
+  }
+
+  double target_floor() const { return target_floor_; }
+
+  // How far the character's feet are above their standing heights (units).
+  double target_clearance(const Transforms& G) const {
+    double c = std::numeric_limits<double>::infinity();
+    for (const auto& [b, h] : target_feet_) c = std::min(c, G[b].translation()(up_) - h);
+    for (size_t i = 0; i < floor_markers_.size(); ++i) c = std::min(c, marker_height(G, floor_markers_[i]) - marker_rest_[i]);
+    return c;
+  }
+
+  // How far the source's feet at positions p are above their standing heights over the
+  // floor (metres).
+  double source_clearance(const std::vector<Eigen::Vector3d>& p, double source_floor_m) const {
+    double c = std::numeric_limits<double>::infinity();
+    for (const auto& [a, h] : source_feet_) c = std::min(c, p[a](up_) - (source_floor_m + h));
+    return c;
+  }
+
+ private:
+  double marker_height(const Transforms& G, int mk) const {
+    const Marker& marker = s_.markers[mk];
+    return (G[marker.joint] * (zero_pose_[marker.joint].inverse(Eigen::Isometry) * marker.offset))(up_);
+  }
+
+  const Skeleton& s_;
+  int up_;
+  std::vector<int> floor_markers_;
+  Transforms zero_pose_;
+  double target_floor_;
+  std::vector<std::pair<int, double>> target_feet_;  // joint, rest height (units)
+  std::vector<std::pair<int, double>> source_feet_;  // joint, standing height (m)
+  std::vector<double> marker_rest_;                  // per floor marker, rest height (units)
+};
+
+// Where the character's root goes for source positions p (character units): the source's
+// root scaled by k; its height over the floor (root_on_floor) or absolute; across the floor
+// relative to the first frame (root_relative) or absolute.
+class RootTargets {
+ public:
+  RootTargets(const Resolved& res, const RetargetMapping& m, const Transforms& rest,
+              const std::vector<Eigen::Vector3d>& first, double k, double metres_per_unit,
+              double target_floor, double source_floor_m)
+      : res_(res), m_(m), k_(k), metres_per_unit_(metres_per_unit), target_floor_(target_floor),
+        source_floor_m_(source_floor_m) {
+    target_root_rest_ = Eigen::Vector3d::Zero();
+    for (int b : res.target_root) target_root_rest_ += rest[b].translation();
+    target_root_rest_ /= static_cast<double>(res.target_root.size());
+    source_root_0_ = source_root(first);
+  }
+
+  Eigen::Vector3d at(const std::vector<Eigen::Vector3d>& p) const {
+    const Eigen::Vector3d ps = source_root(p);
+    Eigen::Vector3d root;
+    for (int i = 0; i < 3; ++i) {
+      if (i == m_.up_axis) {
+        root(i) = m_.root_on_floor ? target_floor_ + k_ * (ps(i) - source_floor_m_) / metres_per_unit_
+                                   : k_ * ps(i) / metres_per_unit_;
+      } else {
+        root(i) = m_.root_relative ? target_root_rest_(i) + k_ * (ps(i) - source_root_0_(i)) / metres_per_unit_
+                                   : k_ * ps(i) / metres_per_unit_;
+      }
+    }
+    return root;
+  }
+
+ private:
+  Eigen::Vector3d source_root(const std::vector<Eigen::Vector3d>& p) const {
+    Eigen::Vector3d r = Eigen::Vector3d::Zero();
+    for (int a : res_.source_root) r += p[a];
+    return Eigen::Vector3d(r / static_cast<double>(res_.source_root.size()));
+  }
+
+  const Resolved& res_;
+  const RetargetMapping& m_;
+  double k_, metres_per_unit_, target_floor_, source_floor_m_;
+  Eigen::Vector3d target_root_rest_, source_root_0_;
+};
+
+// Of the solved dofs, the root's own: translations and the rotations above every mapped
+// joint.
+std::vector<int> root_dofs_of(const std::vector<int>& solved, const Skeleton& s, const Resolved& res,
+                              const Solver& solver) {
+  std::vector<int> root_dofs;
+  for (int d : solved) {
+    bool above_all = true;
+    for (const DofInfluence& inf : s.dofs[d].joints)
+      for (int e : res.target_mapped) above_all = above_all && solver.is_ancestor(inf.joint, e);
+    if (above_all) root_dofs.push_back(d);
+  }
+  return root_dofs;
+}
+
+// Frame f's dofs q, its mean bone direction error (degrees) and its root error (units)
+// against the targets t, into out.
+void record_frame(int f, const Eigen::VectorXd& q, const Targets& t, const Resolved& res, const Skeleton& s,
+                  RetargetResult& out) {
+  const std::vector<RetargetBone>& bones = out.bones;
+  out.motion.dofs.row(f) = q.transpose();
+  out.motion.frame_ids[f] = f;
+  const Transforms G = forward_kinematics(s, q);
+  double sum = 0;
+  for (size_t b = 0; b < bones.size(); ++b)
+    sum += angle_deg(t.directions[b], G[bones[b].target_to].translation() - G[bones[b].target_from].translation());
+  out.direction_error_deg(f) = sum / static_cast<double>(bones.size());
+  Eigen::Vector3d root = Eigen::Vector3d::Zero();
+  for (int b : res.target_root) root += G[b].translation();
+  out.root_error(f) = (root / static_cast<double>(res.target_root.size()) - t.root).norm();
+}
+
 }  // namespace
 
 // ----------------------------------------------------------------- mapping files
@@ -409,158 +646,42 @@ Eigen::VectorXd bone_direction_errors_deg(const BvhMotion& motion, const Retarge
 RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m, const Skeleton& s,
                                const Eigen::VectorXd& rest_dofs, double metres_per_unit,
                                const RetargetOptions& o) {
-  const std::string file = display_name(m.file);
   if (motion.num_frames() == 0) fail(display_name(motion.source), ": no frames to retarget");
   if (rest_dofs.size() != s.num_dofs())
     fail("retarget: ", rest_dofs.size(), " rest dofs for a skeleton with ", s.num_dofs());
   if (!(metres_per_unit > 0)) fail("retarget: metres_per_unit must be > 0");
   const Resolved res = resolve(motion, m, s);
   const int up = m.up_axis;
-
-  // Output times (source seconds).
-  const double end = o.end_s < 0 ? motion.duration_s() : std::min(o.end_s, motion.duration_s());
-  if (o.start_s < 0 || o.start_s > end) fail("retarget: clip window [", o.start_s, ", ", end, "] s is empty");
-  const double fps = o.fps > 0 ? o.fps : 1.0 / motion.frame_time_s;
-  std::vector<double> times = resample_times(end - o.start_s, fps);
-  for (double& t : times) t += o.start_s;
-  const int F = static_cast<int>(times.size());
+  const OutputTimes times = output_times(motion, o);
+  const int F = static_cast<int>(times.times.size());
 
   // Rest pose of the character and zero pose of the source: lengths, heights, scale.
   const Transforms rest = forward_kinematics(s, rest_dofs);
   const BvhTransforms zero = bvh_zero_pose(motion);
-  double source_length = 0, target_length = 0;  // metres, summed over the joint-to-joint bones
-  double target_length_units = 0;
-  for (const RetargetBone& b : res.bones) {
-    const double ls = (zero[b.source_to].translation() - zero[b.source_from].translation()).norm();
-    const double lt = (rest[b.target_to].translation() - rest[b.target_from].translation()).norm();
-    if (!(ls > 1e-9)) fail(file, ": bone '", b.name, "' has zero length in the source skeleton");
-    if (!(lt > 1e-9))
-      fail(file, ": bone '", b.name, "' has zero length in the character (",
-           s.joints[b.target_from].name, " and ", s.joints[b.target_to].name, " coincide)");
-    const bool extra = std::any_of(m.extra_bones.begin(), m.extra_bones.end(), [&](const RetargetBoneSpec& e) {
-      return e.source_from + "->" + e.source_to == b.name;
-    });
-    if (!extra) {
-      source_length += ls * m.source_metres_per_unit;
-      target_length += lt * metres_per_unit;
-    }
-    target_length_units += lt;
-  }
+  const BoneLengths lengths = bone_lengths(res, m, s, rest, zero, metres_per_unit);
   RetargetResult out;
-  out.fps = fps;
-  out.root_scale = m.root_scale > 0 ? m.root_scale : target_length / source_length;
+  out.fps = times.fps;
+  out.root_scale = m.root_scale > 0 ? m.root_scale : lengths.target_m / lengths.source_m;
   const double k = out.root_scale;
-  std::vector<RetargetBone> bones = res.bones;
-  for (RetargetBone& b : bones) {
-    const std::string& end = motion.joints[b.source_to].name;
-    if (std::find(m.rest_elevation.begin(), m.rest_elevation.end(), end) == m.rest_elevation.end()) continue;
-    const Eigen::Vector3d ds = (m.source_to_target * (zero[b.source_to].translation() - zero[b.source_from].translation())).normalized();
-    const Eigen::Vector3d dc = (rest[b.target_to].translation() - rest[b.target_from].translation()).normalized();
-    b.elevation_offset = std::asin(std::clamp(dc(up), -1.0, 1.0)) - std::asin(std::clamp(ds(up), -1.0, 1.0));
-  }
-  out.bones = bones;
+  out.bones = with_rest_elevation(res.bones, motion, m, rest, zero);
+  const std::vector<RetargetBone>& bones = out.bones;
 
   // Source joint positions per output frame (metres, character axes).
   std::vector<std::vector<Eigen::Vector3d>> src(F);
-  for (int f = 0; f < F; ++f) src[f] = source_positions(motion, m, times[f]);
-  auto lowest_mapped = [&](const std::vector<Eigen::Vector3d>& p) {
-    double low = std::numeric_limits<double>::infinity();
-    for (int a : res.source_mapped) low = std::min(low, p[a](up));
-    return low;
-  };
-  {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int a : res.source_mapped) lo = std::min(lo, src[0][a](up)), hi = std::max(hi, src[0][a](up));
-    out.source_height_m = hi - lo;
-    lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int b : res.target_mapped) lo = std::min(lo, rest[b].translation()(up)), hi = std::max(hi, rest[b].translation()(up));
-    out.target_height = hi - lo;
-  }
-  double source_floor_m = 0;
-  if (std::isnan(m.source_floor)) {
-    std::vector<double> lows(F);
-    for (int f = 0; f < F; ++f) lows[f] = lowest_mapped(src[f]);
-    std::nth_element(lows.begin(), lows.begin() + F / 2, lows.end());
-    source_floor_m = lows[F / 2];
-  } else {
-    source_floor_m = m.source_floor * m.source_metres_per_unit;
-  }
-  std::vector<int> floor_markers;
-  for (const std::string& n : m.floor_markers) {
-    const int k2 = s.marker_index(n);
-    if (k2 < 0) fail(file, ": floor marker '", n, "' is not a marker of the skeleton");
-    floor_markers.push_back(k2);
-  }
-  const Transforms zero_pose = forward_kinematics(s, Eigen::VectorXd::Zero(s.num_dofs()));
-  // The character's lowest foot point: mapped joints and floor markers (character units).
-  auto lowest_target = [&](const Transforms& G) {
-    double low = std::numeric_limits<double>::infinity();
-    for (int b : res.target_mapped) low = std::min(low, G[b].translation()(up));
-    for (int mk : floor_markers) {
-      const Marker& marker = s.markers[mk];
-      low = std::min(low, (G[marker.joint] * (zero_pose[marker.joint].inverse(Eigen::Isometry) * marker.offset))(up));
-    }
-    return low;
-  };
-  const double target_floor = lowest_target(rest);
-  // Feet for the floor: mapped joints near the bottom of each skeleton in its standing
-  // pose (within 15% of its height: feet, not hands), and the floor markers. Each keeps its
-  // own standing height, so a heel strike lowers the heel to its standing height, not to
-  // the toes' height.
-  std::vector<std::pair<int, double>> target_feet;  // joint, rest height (units)
-  for (int b : res.target_mapped)
-    if (rest[b].translation()(up) <= target_floor + 0.15 * out.target_height)
-      target_feet.emplace_back(b, rest[b].translation()(up));
-  std::vector<std::pair<int, double>> source_feet;  // joint, standing height (m)
-  {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int a : res.source_mapped) {
-      const double h = (m.source_to_target * zero[a].translation())(up);
-      lo = std::min(lo, h), hi = std::max(hi, h);
-    }
-    for (int a : res.source_mapped) {
-      const double h = (m.source_to_target * zero[a].translation())(up);
-      if (h <= lo + 0.15 * (hi - lo)) source_feet.emplace_back(a, (h - lo) * m.source_metres_per_unit);
-    }
-  }
-  auto marker_height = [&](const Transforms& G, int mk) {
-    const Marker& marker = s.markers[mk];
-    return (G[marker.joint] * (zero_pose[marker.joint].inverse(Eigen::Isometry) * marker.offset))(up);
-  };
-  std::vector<double> marker_rest;
-  for (int mk : floor_markers) marker_rest.push_back(marker_height(rest, mk));
-  // How far the character's feet are above their standing heights (units).
-  auto target_clearance = [&](const Transforms& G) {
-    double c = std::numeric_limits<double>::infinity();
-    for (const auto& [b, h] : target_feet) c = std::min(c, G[b].translation()(up) - h);
-    for (size_t i = 0; i < floor_markers.size(); ++i) c = std::min(c, marker_height(G, floor_markers[i]) - marker_rest[i]);
-    return c;
-  };
-  out.source_floor_m = source_floor_m;
-  out.target_floor = target_floor;
-  Eigen::Vector3d target_root_rest = Eigen::Vector3d::Zero();
-  for (int b : res.target_root) target_root_rest += rest[b].translation();
-  target_root_rest /= static_cast<double>(res.target_root.size());
-  auto source_root = [&](int f) {
-    Eigen::Vector3d p = Eigen::Vector3d::Zero();
-    for (int a : res.source_root) p += src[f][a];
-    return Eigen::Vector3d(p / static_cast<double>(res.source_root.size()));
-  };
-  const Eigen::Vector3d source_root_0 = source_root(0);
+  for (int f = 0; f < F; ++f) src[f] = source_positions(motion, m, times.times[f]);
+  measure_heights(res, src[0], rest, up, out);
+  out.source_floor_m = source_floor(res, m, src);
+  const Feet feet(res, m, s, rest, zero, out.target_height);
+  out.target_floor = feet.target_floor();
+  const RootTargets roots(res, m, rest, src[0], k, metres_per_unit, out.target_floor, out.source_floor_m);
 
   // Root residuals are divided by the mean bone length: comparable to direction residuals.
-  const double mean_bone = target_length_units / static_cast<double>(res.bones.size());
+  const double mean_bone = lengths.target_units / static_cast<double>(res.bones.size());
   Solver solver(s, bones, res.target_root, m.root_weight, mean_bone, m);
   out.solved_dofs = solver.observable_dofs(m.fixed_dofs);
-  // For the first frame, the root's own dofs first (translations and the rotations above
-  // every mapped joint): the character may face anywhere relative to the source.
-  std::vector<int> root_dofs;
-  for (int d : out.solved_dofs) {
-    bool above_all = true;
-    for (const DofInfluence& inf : s.dofs[d].joints)
-      for (int e : res.target_mapped) above_all = above_all && solver.is_ancestor(inf.joint, e);
-    if (above_all) root_dofs.push_back(d);
-  }
+  // For the first frame, the root's own dofs first: the character may face anywhere
+  // relative to the source.
+  const std::vector<int> root_dofs = root_dofs_of(out.solved_dofs, s, res, solver);
 
   out.motion.dofs.resize(F, s.num_dofs());
   out.motion.frame_ids.resize(F);
@@ -570,16 +691,7 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
   for (int f = 0; f < F; ++f) {
     Targets t;
     for (const RetargetBone& b : bones) t.directions.push_back(target_direction(src[f], b, up));
-    const Eigen::Vector3d ps = source_root(f);
-    for (int i = 0; i < 3; ++i) {
-      if (i == up) {
-        t.root(i) = m.root_on_floor ? target_floor + k * (ps(i) - source_floor_m) / metres_per_unit
-                                    : k * ps(i) / metres_per_unit;
-      } else {
-        t.root(i) = m.root_relative ? target_root_rest(i) + k * (ps(i) - source_root_0(i)) / metres_per_unit
-                                    : k * ps(i) / metres_per_unit;
-      }
-    }
+    t.root = roots.at(src[f]);
     const Eigen::VectorXd previous = q;
     if (f == 0) {
       if (!root_dofs.empty()) solver.solve(q, t, root_dofs, previous, rest_dofs, 10 * m.iterations);
@@ -591,21 +703,11 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
       // Feet: the character's lowest mapped joint goes where the source's is (scaled),
       // whatever the two skeletons' leg proportions; the hip-height target alone leaves
       // a character with relatively shorter legs floating. Only the root height moves.
-      double source_clearance = std::numeric_limits<double>::infinity();  // metres
-      for (const auto& [a, h] : source_feet) source_clearance = std::min(source_clearance, src[f][a](up) - (source_floor_m + h));
-      t.root(up) += k * source_clearance / metres_per_unit - target_clearance(forward_kinematics(s, q));
+      const double source_clearance = feet.source_clearance(src[f], out.source_floor_m);  // metres
+      t.root(up) += k * source_clearance / metres_per_unit - feet.target_clearance(forward_kinematics(s, q));
       solver.solve(q, t, out.solved_dofs, previous, rest_dofs, m.iterations);
     }
-    out.motion.dofs.row(f) = q.transpose();
-    out.motion.frame_ids[f] = f;
-    const Transforms G = forward_kinematics(s, q);
-    double sum = 0;
-    for (size_t b = 0; b < bones.size(); ++b)
-      sum += angle_deg(t.directions[b], G[bones[b].target_to].translation() - G[bones[b].target_from].translation());
-    out.direction_error_deg(f) = sum / static_cast<double>(bones.size());
-    Eigen::Vector3d root = Eigen::Vector3d::Zero();
-    for (int b : res.target_root) root += G[b].translation();
-    out.root_error(f) = (root / static_cast<double>(res.target_root.size()) - t.root).norm();
+    record_frame(f, q, t, res, s, out);
     if (o.progress) o.progress(f + 1, F);
   }
   out.mean_direction_error_deg = out.direction_error_deg.mean();

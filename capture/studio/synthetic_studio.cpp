@@ -374,6 +374,421 @@ std::string yaml_int_list(const std::vector<int>& v) {
   return s.str();
 }
 
+
+// ------------------------------------------------------------------ the stages of synthesize_dataset
+
+using SynthProgressFn = std::function<void(const SynthProgress&)>;
+
+// Character: generated, written into the dataset, used from memory.
+DefaultCharacter make_dataset_character(const SynthConfig& cfg, const fs::path& out) {
+  const DefaultCharacterConfig char_cfg = load_default_character_config(cfg.character);
+  DefaultCharacter dc = make_default_character(char_cfg);
+  write_default_character(dc, char_cfg, (out / "character").string());
+  WEFT_CHECK(dc.character.has_cloth(), cfg.character, ": the character has no garment (garment.type none); the studio "
+             "simulates and renders a garment");
+  return dc;
+}
+
+// The ground-truth motion: the clips' frames one after another; clip k starts at dataset
+// frame segments[k].
+struct PosedMotion {
+  int frames = 0;
+  std::vector<int> segments;
+  Motion gt;
+  std::vector<PosedCharacter> posed;  // per frame
+  int clips() const { return static_cast<int>(segments.size()); }
+  int segment_end(int k) const { return k + 1 < clips() ? segments[k + 1] : frames; }
+};
+
+PosedMotion pose_motion(const SynthConfig& cfg, const Character& ch, const SynthProgressFn& progress) {
+  PosedMotion pm;
+  const int frames = pm.frames = cfg.frames();
+  std::vector<PosedCharacter>& posed = pm.posed;
+  Motion& gt = pm.gt;
+  posed.reserve(frames);
+  for (size_t k = 0; k < cfg.motions.size(); ++k) {
+    const SynthMotionConfig& m = cfg.motions[k];
+    const Motion motion = load_dataset_motion(cfg, k, ch, progress);
+    if (k == 0) gt.dofs.resize(frames, motion.dofs.cols());
+    const int first = static_cast<int>(posed.size());
+    pm.segments.push_back(first);
+    Eigen::MatrixXd clip(m.frames, motion.dofs.cols());
+    for (int i = 0; i < m.frames; ++i) clip.row(i) = motion.dofs.row(i * m.stride);
+    if (m.in_place_s >= 0)
+      take_away_horizontal_path(ch.skeleton, clip, m.in_place_s * m.fps,
+                                cfg.file + ": " + cfg.motion_key(k) + ".in_place_s");
+    gt.dofs.middleRows(first, m.frames) = clip;
+    for (int i = 0; i < m.frames; ++i) {
+      const int f = first + i;
+      gt.frame_ids.push_back(f);
+      const Eigen::VectorXd dofs = gt.dofs.row(f).transpose();
+      WEFT_CHECK(dofs.allFinite(), cfg.file, ": ", cfg.motion_key(k), " has a non-finite dof at dataset frame ", f);
+      posed.push_back(pose_character(ch, dofs));
+    }
+  }
+  return pm;
+}
+
+// The ground-truth cloth per frame, and metrics.json's record of each frame.
+struct ClothTrack {
+  std::vector<Vertices> cloth;
+  nlohmann::json metric_frames = nlohmann::json::array();
+};
+
+// Frame f's report of a simulation step r with metrics m, and its metrics.json record.
+nlohmann::json step_record(int f, const physics::StepResult& r, const physics::FrameMetrics& m,
+                           const SynthSimulationConfig& s, SynthFrameReport& rep) {
+  rep.frame = f;
+  rep.status = physics::to_string(r.status);
+  rep.newton_iterations = r.newton_iterations;
+  rep.penetration_max = m.penetration_max;
+  rep.oob_force_max_rel = m.oob_force_max_rel;
+  // Failed: ended more than 10× Newton's tolerance from equilibrium (a step stopped by the
+  // iteration cap or the line search close to it is kept), non-finite, or too deep.
+  const bool near_converged =
+      r.status == physics::StepStatus::converged ||
+      (r.status != physics::StepStatus::non_finite && r.last.residual <= 10 * s.tolerance);
+  rep.failed = !near_converged || m.penetration_max > s.max_penetration || !r.x.allFinite();
+  physics::FrameRecord rec;
+  rec.frame = f;
+  rec.status = r.status;
+  rec.newton_iterations = r.newton_iterations;
+  rec.gradient_norm = r.gradient_norm;
+  rec.energy = r.energy;
+  rec.metrics = m;
+  nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
+  entry["failed"] = rep.failed;
+  entry["substeps"] = r.substeps;  // of the attempt kept (adaptive, then halved on retries)
+  entry["residual"] = finite_or_null(r.last.residual);
+  return entry;
+}
+
+// Simulates clip k's garment: settled on the clip's first pose, then stepped over its
+// frames; `done` of `total` counts the simulation's progress.
+void simulate_clip(const SynthConfig& cfg, const Character& ch, const PosedMotion& pm, int k,
+                   const std::vector<int>& anchors, const SynthProgressFn& progress, int total, int& done,
+                   ClothTrack& track, SynthSummary& summary) {
+  const SynthSimulationConfig& s = cfg.simulation;
+  const double mpu = ch.metres_per_unit;
+  const std::vector<PosedCharacter>& posed = pm.posed;
+  auto body_metres = [&](int f) -> Eigen::MatrixX3d { return posed[f].body * mpu; };
+  auto pin_targets = [&](int f) { return garment_pin_targets(ch, posed[f].cloth); };
+  const int first = pm.segments[k], end = pm.segment_end(k);
+  const std::unique_ptr<physics::ClothSimulator> simulator =
+      make_garment_simulator(ch, s, cfg.fps(), body_metres(first), pin_targets(first));
+  physics::ClothSimulator& sim = *simulator;
+  const double h = sim.settings().time_step;
+  physics::Positions x2 = to_positions(posed[first].cloth, mpu), x1 = x2;
+  Eigen::MatrixX3d body_prev = body_metres(first), body_now;
+  // Settling: the garment falls into its rest drape on the clip's first pose.
+  for (int i = 0; i < s.settle_frames; ++i) {
+    physics::StepResult r = sim.step(x2, x1);
+    x2 = std::move(x1);
+    x1 = std::move(r.x);
+    if (progress) progress({"simulation", ++done, total});
+  }
+  track.cloth[first] = to_vertices(x1, mpu);
+  SynthFrameReport& settled = summary.reports[first];
+  settled.frame = first;
+  settled.status = s.settle_frames > 0 ? "settled" : "skinned";
+  {
+    physics::FrameMetrics m;
+    physics::measure_penetration(sim, x1, m);
+    settled.penetration_max = m.penetration_max;
+    settled.failed = m.penetration_max > s.max_penetration;
+    track.metric_frames.push_back({{"frame", first}, {"status", settled.status},
+                                   {"penetration_max", m.penetration_max},
+                                   {"min_signed_distance", finite_or_null(m.min_signed_distance)}});
+  }
+  for (int f = first + 1; f < end; ++f) {
+    body_now = body_metres(f);
+    sim.set_pins(anchors, pin_targets(f));
+    physics::StepResult r = sim.step(x2, x1, &body_prev, &body_now);
+    const physics::FrameMetrics m = physics::frame_metrics(sim, x2, x1, r.x, h);
+    track.metric_frames.push_back(step_record(f, r, m, s, summary.reports[f]));
+    track.cloth[f] = to_vertices(r.x, mpu);
+    x2 = std::move(x1);
+    x1 = std::move(r.x);
+    body_prev = body_now;
+    if (progress) progress({"simulation", ++done, total});
+  }
+}
+
+// Ground-truth cloth: simulated over the motion (or skinned); a report per frame.
+ClothTrack ground_truth_cloth(const SynthConfig& cfg, const Character& ch, const PosedMotion& pm,
+                              const SynthProgressFn& progress, SynthSummary& summary) {
+  const int frames = pm.frames;
+  ClothTrack track;
+  track.cloth.resize(frames);
+  summary.reports.resize(frames);
+  if (!cfg.simulation.enabled) {
+    for (int f = 0; f < frames; ++f) {
+      track.cloth[f] = pm.posed[f].cloth;
+      summary.reports[f].frame = f;
+    }
+    return track;
+  }
+  const std::vector<int> anchors = garment_pin_vertices(ch);
+  const int total = pm.clips() * cfg.simulation.settle_frames + frames - pm.clips();
+  int done = 0;
+  // Each clip is a simulation of its own, started like the first: the next clip's body
+  // starts somewhere else, and one step across the boundary would tear the garment.
+  for (int k = 0; k < pm.clips(); ++k) simulate_clip(cfg, ch, pm, k, anchors, progress, total, done, track, summary);
+  return track;
+}
+
+// The cameras: per view its name and a camera per frame, and each frame's exposure.
+struct CameraSetup {
+  std::vector<std::string> views;
+  std::vector<std::vector<Camera>> cameras;  // [view][frame]
+  std::vector<double> exposure;
+  int num_views() const { return static_cast<int>(views.size()); }
+};
+
+// The wild camera's path over every frame, and the frames' exposure. Each clip is a take of
+// its own: the orbit starts again and follows that clip's subject (smoothing across a clip
+// boundary would drag the camera after a jump).
+std::vector<Camera> wild_cameras(const SynthConfig& cfg, double mpu, const PosedMotion& pm,
+                                 std::vector<double>& exposure) {
+  WildCameraConfig wild = cfg.cameras.wild;
+  wild.metres_per_unit = mpu;
+  std::vector<Camera> path;
+  for (int k = 0; k < pm.clips(); ++k) {
+    const int first = pm.segments[k], n = pm.segment_end(k) - first;
+    std::vector<Eigen::Vector3d> subject_track(n);  // the body's vertex centroid, character units
+    for (int i = 0; i < n; ++i) subject_track[i] = pm.posed[first + i].body.colwise().mean().transpose();
+    const uint64_t seed = k == 0 ? cfg.seed : mix_seed(cfg.seed, kWildTakeStream, static_cast<uint64_t>(k));
+    const std::vector<Camera> take = wild_camera_path(wild, n, cfg.fps(), seed, subject_track);
+    const std::vector<double> light = wild_exposure(wild, n, cfg.fps(), seed);
+    path.insert(path.end(), take.begin(), take.end());
+    std::copy(light.begin(), light.end(), exposure.begin() + first);
+  }
+  for (int f = 0; f < pm.frames; ++f) path[f].name = "wild_" + dataset_frame_name(f);
+  return path;
+}
+
+// The studio rig or the wild camera, written to cameras.yaml.
+CameraSetup make_cameras(const SynthConfig& cfg, double mpu, const PosedMotion& pm, const fs::path& out) {
+  const int frames = pm.frames;
+  CameraSetup cs;
+  cs.exposure.assign(frames, 1.0);
+  if (cfg.cameras.kind == CameraRigKind::studio) {
+    StudioRigConfig rig = cfg.cameras.studio;
+    rig.metres_per_unit = mpu;
+    const std::vector<Camera> cams = studio_rig(rig);
+    for (const Camera& c : cams) {
+      cs.views.push_back(c.name);
+      cs.cameras.emplace_back(frames, c);
+    }
+    write_cameras_yaml((out / "cameras.yaml").string(), cams);
+  } else {
+    const std::vector<Camera> path = wild_cameras(cfg, mpu, pm, cs.exposure);
+    cs.views.push_back("wild");
+    cs.cameras.push_back(path);
+    write_cameras_yaml((out / "cameras.yaml").string(), path);
+  }
+  return cs;
+}
+
+// What the renders take besides the meshes: the clutter background, per clip the lights
+// and (photos) each view's background, and the body's texture.
+struct RenderLooks {
+  cv::Mat clutter;
+  std::vector<int> clip_of;                       // per frame
+  std::vector<Lighting> clip_lighting;            // per clip
+  std::vector<std::vector<cv::Mat>> clip_photos;  // [clip][view]
+  cv::Mat body_texture;
+};
+
+RenderLooks render_looks(const SynthConfig& cfg, const Character& ch, const PosedMotion& pm, const CameraSetup& cs) {
+  const std::vector<std::vector<Camera>>& cameras = cs.cameras;
+  RenderLooks looks;
+  looks.clutter = cfg.render.background == BackgroundKind::clutter
+                      ? cluttered_background(cameras[0][0].width, cameras[0][0].height, cfg.seed)
+                      : cv::Mat();
+  looks.clip_of.resize(pm.frames);
+  looks.clip_photos.resize(pm.clips());
+  for (int k = 0; k < pm.clips(); ++k) {
+    std::fill(looks.clip_of.begin() + pm.segments[k], looks.clip_of.begin() + pm.segment_end(k), k);
+    looks.clip_lighting.push_back(draw_lighting(cfg.render.lighting, cfg.seed, k));
+    if (cfg.render.background == BackgroundKind::image)
+      for (int v = 0; v < cs.num_views(); ++v)
+        looks.clip_photos[k].push_back(draw_photo_background(cfg.render.photos, cameras[v][pm.segments[k]].width,
+                                                             cameras[v][pm.segments[k]].height, cfg.seed, k, v));
+  }
+  if (!cfg.render.body_texture.empty()) {
+    looks.body_texture = cv::imread(cfg.render.body_texture, cv::IMREAD_COLOR);
+    WEFT_CHECK(!looks.body_texture.empty(), cfg.render.body_texture, ": cannot read the body texture (", cfg.file,
+               ": render.body_texture)");
+    WEFT_CHECK(ch.body.mesh.has_uv(), cfg.file, ": render.body_texture needs texture coordinates in the body mesh ",
+               ch.body.path, ", which has none");
+  }
+  return looks;
+}
+
+// Frame f seen by view v: the body (skin, textured or painted) and the garment.
+RenderResult render_view(const SynthConfig& cfg, const Character& ch, const Vertices& body_vertices,
+                         const Vertices& cloth_vertices, const Camera& cam, const RenderLooks& looks,
+                         double exposure, int f, int v) {
+  const TriangleMesh& cloth_mesh = ch.cloth->mesh;
+  RenderMesh body, garment;
+  body.mesh = &ch.body.mesh;
+  body.vertices = &body_vertices;
+  body.part = 1;
+  body.color = cv::Scalar(150, 175, 215);  // BGR: skin
+  if (!looks.body_texture.empty()) {
+    body.source = ColorSource::texture;
+    body.texture = looks.body_texture;
+  } else if (ch.body.mesh.has_colors()) {
+    body.source = ColorSource::vertex;  // a painted character (appearance.h)
+  }
+  garment.mesh = &cloth_mesh;
+  garment.vertices = &cloth_vertices;
+  garment.part = 2;
+  garment.color = cv::Scalar(60, 60, 190);  // BGR: a red skirt
+  if (cloth_mesh.has_colors()) garment.source = ColorSource::vertex;
+  RenderOptions o;
+  o.supersample = cfg.render.supersample;
+  o.lighting = looks.clip_lighting[looks.clip_of[f]];
+  o.lighting.exposure = exposure;
+  if (cfg.render.background == BackgroundKind::clutter) {
+    o.background.kind = BackgroundKind::image;
+    o.background.image = looks.clutter;
+  } else if (cfg.render.background == BackgroundKind::image) {
+    o.background.kind = BackgroundKind::image;
+    o.background.image = looks.clip_photos[looks.clip_of[f]][v];
+  }
+  return render(cam, {body, garment}, o);
+}
+
+// Rendering, keypoints, files: (frame, view) pairs in parallel, each writing its own files.
+// The wall time goes to the summary's rendering and writing seconds.
+void render_dataset(const SynthConfig& cfg, const Character& ch, const PosedMotion& pm, const ClothTrack& track,
+                    const CameraSetup& cs, const fs::path& out, const SynthProgressFn& progress,
+                    SynthSummary& summary) {
+  const int frames = pm.frames, num_views = cs.num_views();
+  const std::vector<std::string>& views = cs.views;
+  double render_seconds = 0, write_seconds = 0;
+  std::mutex time_mutex;
+  std::atomic<int> rendered{0};
+  const RenderLooks looks = render_looks(cfg, ch, pm, cs);
+  const auto t_render = Clock::now();
+  tbb::parallel_for(0, frames * num_views, [&](int job) {
+    const int f = job / num_views, v = job % num_views;
+    const Camera& cam = cs.cameras[v][f];
+    const auto a = Clock::now();
+    const RenderResult r = render_view(cfg, ch, pm.posed[f].body, track.cloth[f], cam, looks, cs.exposure[f], f, v);
+    const cv::Mat dt = distance_transform(r.mask);
+    KeypointNoiseConfig noise = cfg.keypoints;
+    noise.metres_per_unit = ch.metres_per_unit;
+    const Body25 kp = synthesize_keypoints(cam, pm.posed[f].body25, r.depth, noise,
+                                           mix_seed(cfg.seed, static_cast<uint64_t>(v), static_cast<uint64_t>(f)));
+    const auto b = Clock::now();
+    write_png_atomically(frame_file(out / "images", views[v], f, ".png"), r.rgb);
+    write_png_atomically(frame_file(out / "masks", views[v], f, ".png"), r.mask);
+    write_png_atomically(frame_file(out / "parts", views[v], f, ".png"), r.parts);
+    write_png_atomically(frame_file(out / "dt", views[v], f, ".png"), quantize_dt(dt, cfg.render.dt_scale));
+    OpenPoseFrame op;
+    op.people.push_back(kp);
+    write_openpose_json(frame_file(out / "keypoints", views[v], f, "_keypoints.json"), op);
+    const auto c = Clock::now();
+    {
+      std::lock_guard<std::mutex> lock(time_mutex);
+      render_seconds += std::chrono::duration<double>(b - a).count();
+      write_seconds += std::chrono::duration<double>(c - b).count();
+    }
+    const int n = ++rendered;
+    if (progress) progress({"rendering", n, frames * num_views});
+  });
+  const double render_wall = seconds_since(t_render);
+  // Split the wall time of the parallel loop by the CPU-time shares of its two halves.
+  const double busy = render_seconds + write_seconds;
+  summary.seconds_rendering = busy > 0 ? render_wall * render_seconds / busy : 0;
+  summary.seconds_writing = busy > 0 ? render_wall * write_seconds / busy : 0;
+}
+
+// Ground-truth meshes.
+void write_ground_truth_meshes(const Character& ch, const PosedMotion& pm, const ClothTrack& track,
+                               const fs::path& out) {
+  for (int f = 0; f < pm.frames; ++f) {
+    write_ply((out / "gt" / ("body_" + dataset_frame_name(f) + ".ply")).string(),
+              with_vertices(ch.body.mesh, pm.posed[f].body));
+    write_ply((out / "gt" / ("cloth_" + dataset_frame_name(f) + ".ply")).string(),
+              with_vertices(ch.cloth->mesh, track.cloth[f]));
+  }
+}
+
+// Splits: in each clip one held-out stretch (val, then test) placed at `split_place` of
+// the clip (1: its end; 0.5: its middle), the rest train, so every split sees every
+// motion; failed frames left out.
+void split_frames(const SynthConfig& cfg, const PosedMotion& pm, SynthSummary& summary) {
+  for (int k = 0; k < pm.clips(); ++k) {
+    const ClipSplit split =
+        split_clip(pm.segments[k], pm.segment_end(k), cfg.val_fraction, cfg.test_fraction, cfg.split_place);
+    const auto keep = [&](const std::vector<int>& from, std::vector<int>& to) {
+      for (int f : from)
+        if (!summary.reports[f].failed) to.push_back(f);
+    };
+    keep(split.train, summary.train), keep(split.val, summary.val), keep(split.test, summary.test);
+  }
+}
+
+// metrics.json: deterministic (no wall times; those go to timing.json).
+void write_metrics_json(const SynthConfig& cfg, const Character& ch, const PosedMotion& pm, const ClothTrack& track,
+                        const std::vector<int>& failed, const fs::path& out) {
+  nlohmann::json doc = {{"frames", track.metric_frames},
+                        {"summary",
+                         {{"simulated", cfg.simulation.enabled},
+                          {"cloth_vertices", ch.cloth->mesh.num_vertices()},
+                          {"frames", pm.frames},
+                          {"failed_frames", failed},
+                          {"time_step", 1.0 / cfg.fps()},
+                          {"substeps", cfg.simulation.substeps},
+                          {"settle_frames", cfg.simulation.settle_frames}}}};
+  if (pm.clips() > 1) doc["summary"]["segments"] = pm.segments;  // one clip: the file as before
+  write_text_atomically((out / "metrics.json").string(), doc.dump(2) + "\n");
+}
+
+// dataset.yaml
+void write_dataset_yaml(const SynthConfig& cfg, double mpu, const PosedMotion& pm, const CameraSetup& cs,
+                        const SynthSummary& summary, const std::vector<int>& failed, const fs::path& out) {
+  std::ostringstream y;
+  y << "# Written by `weft synth` from " << cfg.file << " (layout: docs/DATASET.md).\n"
+    << "format: weft-synth/1\n"
+    << "name: " << cfg.name << "\n"
+    << "seed: " << cfg.seed << "\n"
+    << "fps: " << cfg.fps() << "\n"
+    << "metres_per_unit: " << mpu << "\n"
+    << "frames: " << pm.frames << "\n";
+  if (pm.clips() > 1) y << "segments: " << yaml_int_list(pm.segments) << "\n";  // one clip: no key, the file as before
+  y << "views: [";
+  for (int v = 0; v < cs.num_views(); ++v) y << (v ? ", " : "") << cs.views[v];
+  y << "]\n"
+    << "image_width: " << cs.cameras[0][0].width << "\n"
+    << "image_height: " << cs.cameras[0][0].height << "\n"
+    << "camera_per_frame: " << (cfg.cameras.kind == CameraRigKind::wild ? "true" : "false") << "\n"
+    << "character: character/character.yaml\n"
+    << "dt_scale: " << cfg.render.dt_scale << "\n"
+    << "splits:\n"
+    << "  train: " << yaml_int_list(summary.train) << "\n"
+    << "  val: " << yaml_int_list(summary.val) << "\n"
+    << "  test: " << yaml_int_list(summary.test) << "\n"
+    << "failed_frames: " << yaml_int_list(failed) << "\n"
+    << simulation_config_yaml(cfg.simulation);
+  write_text_atomically((out / "dataset.yaml").string(), y.str());
+}
+
+// timing.json: the wall times of the stages.
+void write_timing_json(const SynthSummary& summary, const fs::path& out) {
+  nlohmann::json t = {{"seconds_character", summary.seconds_character},
+                      {"seconds_motion", summary.seconds_motion},
+                      {"seconds_simulation", summary.seconds_simulation},
+                      {"seconds_rendering", summary.seconds_rendering},
+                      {"seconds_writing", summary.seconds_writing},
+                      {"seconds_total", summary.seconds_total},
+                      {"views_per_second", summary.views_per_second()}};
+  write_text_atomically((out / "timing.json").string(), t.dump(2) + "\n");
+}
 }  // namespace
 
 ClipSplit split_clip(int first, int end, double val_fraction, double test_fraction, double place) {
@@ -435,350 +850,46 @@ SynthSummary synthesize_dataset(const SynthConfig& cfg, const std::string& out_d
   const fs::path out(out_dir);
   make_dir(out);
 
-  // Character: generated, written into the dataset, used from memory.
   auto t0 = Clock::now();
-  const DefaultCharacterConfig char_cfg = load_default_character_config(cfg.character);
-  const DefaultCharacter dc = make_default_character(char_cfg);
-  write_default_character(dc, char_cfg, (out / "character").string());
+  const DefaultCharacter dc = make_dataset_character(cfg, out);
   const Character& ch = dc.character;
-  WEFT_CHECK(ch.has_cloth(), cfg.character, ": the character has no garment (garment.type none); the studio "
-             "simulates and renders a garment");
   const double mpu = ch.metres_per_unit;
   summary.seconds_character = seconds_since(t0);
 
-  // Motion: the clips' frames one after another; clip k starts at dataset frame segments[k].
   t0 = Clock::now();
-  const int frames = cfg.frames();
-  std::vector<int> segments;
-  std::vector<PosedCharacter> posed;
-  posed.reserve(frames);
-  Motion gt;
-  for (size_t k = 0; k < cfg.motions.size(); ++k) {
-    const SynthMotionConfig& m = cfg.motions[k];
-    const Motion motion = load_dataset_motion(cfg, k, ch, progress);
-    if (k == 0) gt.dofs.resize(frames, motion.dofs.cols());
-    const int first = static_cast<int>(posed.size());
-    segments.push_back(first);
-    Eigen::MatrixXd clip(m.frames, motion.dofs.cols());
-    for (int i = 0; i < m.frames; ++i) clip.row(i) = motion.dofs.row(i * m.stride);
-    if (m.in_place_s >= 0)
-      take_away_horizontal_path(ch.skeleton, clip, m.in_place_s * m.fps,
-                                cfg.file + ": " + cfg.motion_key(k) + ".in_place_s");
-    gt.dofs.middleRows(first, m.frames) = clip;
-    for (int i = 0; i < m.frames; ++i) {
-      const int f = first + i;
-      gt.frame_ids.push_back(f);
-      const Eigen::VectorXd dofs = gt.dofs.row(f).transpose();
-      WEFT_CHECK(dofs.allFinite(), cfg.file, ": ", cfg.motion_key(k), " has a non-finite dof at dataset frame ", f);
-      posed.push_back(pose_character(ch, dofs));
-    }
-  }
-  const int clips = static_cast<int>(segments.size());
-  auto segment_end = [&](int k) { return k + 1 < clips ? segments[k + 1] : frames; };
+  const PosedMotion motion = pose_motion(cfg, ch, progress);
   make_dir(out / "gt");
-  write_motion((out / "gt" / "pose.motion").string(), gt);
+  write_motion((out / "gt" / "pose.motion").string(), motion.gt);
   summary.seconds_motion = seconds_since(t0);
 
-  // Ground-truth cloth: simulated over the motion (or skinned).
   t0 = Clock::now();
-  const TriangleMesh& cloth_mesh = ch.cloth->mesh;
-  std::vector<Vertices> cloth(frames);
-  summary.reports.resize(frames);
-  nlohmann::json metric_frames = nlohmann::json::array();
-  if (!cfg.simulation.enabled) {
-    for (int f = 0; f < frames; ++f) {
-      cloth[f] = posed[f].cloth;
-      summary.reports[f].frame = f;
-    }
-  } else {
-    const SynthSimulationConfig& s = cfg.simulation;
-    auto body_metres = [&](int f) -> Eigen::MatrixX3d { return posed[f].body * mpu; };
-    const std::vector<int> anchors = garment_pin_vertices(ch);
-    auto pin_targets = [&](int f) { return garment_pin_targets(ch, posed[f].cloth); };
-    const int total = clips * s.settle_frames + frames - clips;
-    int done = 0;
-    // Each clip is a simulation of its own, started like the first: the next clip's body
-    // starts somewhere else, and one step across the boundary would tear the garment.
-    for (int k = 0; k < clips; ++k) {
-      const int first = segments[k], end = segment_end(k);
-      const std::unique_ptr<physics::ClothSimulator> simulator =
-          make_garment_simulator(ch, s, cfg.fps(), body_metres(first), pin_targets(first));
-      physics::ClothSimulator& sim = *simulator;
-      const double h = sim.settings().time_step;
-      physics::Positions x2 = to_positions(posed[first].cloth, mpu), x1 = x2;
-      Eigen::MatrixX3d body_prev = body_metres(first), body_now;
-      // Settling: the garment falls into its rest drape on the clip's first pose.
-      for (int i = 0; i < s.settle_frames; ++i) {
-        physics::StepResult r = sim.step(x2, x1);
-        x2 = std::move(x1);
-        x1 = std::move(r.x);
-        if (progress) progress({"simulation", ++done, total});
-      }
-      cloth[first] = to_vertices(x1, mpu);
-      SynthFrameReport& settled = summary.reports[first];
-      settled.frame = first;
-      settled.status = s.settle_frames > 0 ? "settled" : "skinned";
-      {
-        physics::FrameMetrics m;
-        physics::measure_penetration(sim, x1, m);
-        settled.penetration_max = m.penetration_max;
-        settled.failed = m.penetration_max > s.max_penetration;
-        metric_frames.push_back({{"frame", first}, {"status", settled.status},
-                                 {"penetration_max", m.penetration_max},
-                                 {"min_signed_distance", finite_or_null(m.min_signed_distance)}});
-      }
-      for (int f = first + 1; f < end; ++f) {
-        body_now = body_metres(f);
-        sim.set_pins(anchors, pin_targets(f));
-        physics::StepResult r = sim.step(x2, x1, &body_prev, &body_now);
-        const physics::FrameMetrics m = physics::frame_metrics(sim, x2, x1, r.x, h);
-        SynthFrameReport& rep = summary.reports[f];
-        rep.frame = f;
-        rep.status = physics::to_string(r.status);
-        rep.newton_iterations = r.newton_iterations;
-        rep.penetration_max = m.penetration_max;
-        rep.oob_force_max_rel = m.oob_force_max_rel;
-        // Failed: ended more than 10× Newton's tolerance from equilibrium (a step stopped by the
-        // iteration cap or the line search close to it is kept), non-finite, or too deep.
-        const bool near_converged =
-            r.status == physics::StepStatus::converged ||
-            (r.status != physics::StepStatus::non_finite && r.last.residual <= 10 * s.tolerance);
-        rep.failed = !near_converged || m.penetration_max > s.max_penetration || !r.x.allFinite();
-        physics::FrameRecord rec;
-        rec.frame = f;
-        rec.status = r.status;
-        rec.newton_iterations = r.newton_iterations;
-        rec.gradient_norm = r.gradient_norm;
-        rec.energy = r.energy;
-        rec.metrics = m;
-        nlohmann::json entry = physics::frame_record_json(rec, /*with_timing=*/false);
-        entry["failed"] = rep.failed;
-        entry["substeps"] = r.substeps;  // of the attempt kept (adaptive, then halved on retries)
-        entry["residual"] = finite_or_null(r.last.residual);
-        metric_frames.push_back(entry);
-        cloth[f] = to_vertices(r.x, mpu);
-        x2 = std::move(x1);
-        x1 = std::move(r.x);
-        body_prev = body_now;
-        if (progress) progress({"simulation", ++done, total});
-      }
-    }
-  }
+  const ClothTrack cloth = ground_truth_cloth(cfg, ch, motion, progress, summary);
   summary.seconds_simulation = seconds_since(t0);
   for (const auto& r : summary.reports) summary.failed_frames += r.failed;
 
-  // Cameras.
-  std::vector<std::string> views;
-  std::vector<std::vector<Camera>> cameras;  // [view][frame]
-  std::vector<double> exposure(frames, 1.0);
-  if (cfg.cameras.kind == CameraRigKind::studio) {
-    StudioRigConfig rig = cfg.cameras.studio;
-    rig.metres_per_unit = mpu;
-    const std::vector<Camera> cams = studio_rig(rig);
-    for (const Camera& c : cams) {
-      views.push_back(c.name);
-      cameras.emplace_back(frames, c);
-    }
-    write_cameras_yaml((out / "cameras.yaml").string(), cams);
-  } else {
-    WildCameraConfig wild = cfg.cameras.wild;
-    wild.metres_per_unit = mpu;
-    // Each clip is a take of its own: the orbit starts again and follows that clip's
-    // subject (smoothing across a clip boundary would drag the camera after a jump).
-    std::vector<Camera> path;
-    for (int k = 0; k < clips; ++k) {
-      const int first = segments[k], n = segment_end(k) - first;
-      std::vector<Eigen::Vector3d> subject_track(n);  // the body's vertex centroid, character units
-      for (int i = 0; i < n; ++i) subject_track[i] = posed[first + i].body.colwise().mean().transpose();
-      const uint64_t seed = k == 0 ? cfg.seed : mix_seed(cfg.seed, kWildTakeStream, static_cast<uint64_t>(k));
-      const std::vector<Camera> take = wild_camera_path(wild, n, cfg.fps(), seed, subject_track);
-      const std::vector<double> light = wild_exposure(wild, n, cfg.fps(), seed);
-      path.insert(path.end(), take.begin(), take.end());
-      std::copy(light.begin(), light.end(), exposure.begin() + first);
-    }
-    views.push_back("wild");
-    for (int f = 0; f < frames; ++f) path[f].name = "wild_" + dataset_frame_name(f);
-    cameras.push_back(path);
-    write_cameras_yaml((out / "cameras.yaml").string(), path);
-  }
-  const int num_views = static_cast<int>(views.size());
+  const CameraSetup cameras = make_cameras(cfg, mpu, motion, out);
   for (const char* kind : {"images", "masks", "parts", "dt", "keypoints"})
-    for (const auto& v : views) make_dir(out / kind / v);
+    for (const auto& v : cameras.views) make_dir(out / kind / v);
+  render_dataset(cfg, ch, motion, cloth, cameras, out, progress, summary);
+  write_png_atomically((out / "preview.png").string(), preview_sheet(out, cameras.views, motion.frames));
+  write_ground_truth_meshes(ch, motion, cloth, out);
 
-  // Rendering, keypoints, files: (frame, view) pairs in parallel, each writing its own files.
-  double render_seconds = 0, write_seconds = 0;
-  std::mutex time_mutex;
-  std::atomic<int> rendered{0};
-  const cv::Mat clutter =
-      cfg.render.background == BackgroundKind::clutter
-          ? cluttered_background(cameras[0][0].width, cameras[0][0].height, cfg.seed)
-          : cv::Mat();
-  // Per clip: the lights, and (photos) each view's background.
-  std::vector<int> clip_of(frames);
-  std::vector<Lighting> clip_lighting;
-  std::vector<std::vector<cv::Mat>> clip_photos(clips);  // [clip][view]
-  for (int k = 0; k < clips; ++k) {
-    std::fill(clip_of.begin() + segments[k], clip_of.begin() + segment_end(k), k);
-    clip_lighting.push_back(draw_lighting(cfg.render.lighting, cfg.seed, k));
-    if (cfg.render.background == BackgroundKind::image)
-      for (int v = 0; v < num_views; ++v)
-        clip_photos[k].push_back(draw_photo_background(cfg.render.photos, cameras[v][segments[k]].width,
-                                                       cameras[v][segments[k]].height, cfg.seed, k, v));
-  }
-  cv::Mat body_texture;
-  if (!cfg.render.body_texture.empty()) {
-    body_texture = cv::imread(cfg.render.body_texture, cv::IMREAD_COLOR);
-    WEFT_CHECK(!body_texture.empty(), cfg.render.body_texture, ": cannot read the body texture (", cfg.file,
-               ": render.body_texture)");
-    WEFT_CHECK(ch.body.mesh.has_uv(), cfg.file, ": render.body_texture needs texture coordinates in the body mesh ",
-               ch.body.path, ", which has none");
-  }
-  const auto t_render = Clock::now();
-  tbb::parallel_for(0, frames * num_views, [&](int job) {
-    const int f = job / num_views, v = job % num_views;
-    const Camera& cam = cameras[v][f];
-    const auto a = Clock::now();
-    RenderMesh body, garment;
-    body.mesh = &ch.body.mesh;
-    body.vertices = &posed[f].body;
-    body.part = 1;
-    body.color = cv::Scalar(150, 175, 215);  // BGR: skin
-    if (!body_texture.empty()) {
-      body.source = ColorSource::texture;
-      body.texture = body_texture;
-    } else if (ch.body.mesh.has_colors()) {
-      body.source = ColorSource::vertex;  // a painted character (appearance.h)
-    }
-    garment.mesh = &cloth_mesh;
-    garment.vertices = &cloth[f];
-    garment.part = 2;
-    garment.color = cv::Scalar(60, 60, 190);  // BGR: a red skirt
-    if (cloth_mesh.has_colors()) garment.source = ColorSource::vertex;
-    RenderOptions o;
-    o.supersample = cfg.render.supersample;
-    o.lighting = clip_lighting[clip_of[f]];
-    o.lighting.exposure = exposure[f];
-    if (cfg.render.background == BackgroundKind::clutter) {
-      o.background.kind = BackgroundKind::image;
-      o.background.image = clutter;
-    } else if (cfg.render.background == BackgroundKind::image) {
-      o.background.kind = BackgroundKind::image;
-      o.background.image = clip_photos[clip_of[f]][v];
-    }
-    const RenderResult r = render(cam, {body, garment}, o);
-    const cv::Mat dt = distance_transform(r.mask);
-    KeypointNoiseConfig noise = cfg.keypoints;
-    noise.metres_per_unit = mpu;
-    const Body25 kp = synthesize_keypoints(cam, posed[f].body25, r.depth, noise,
-                                           mix_seed(cfg.seed, static_cast<uint64_t>(v), static_cast<uint64_t>(f)));
-    const auto b = Clock::now();
-    write_png_atomically(frame_file(out / "images", views[v], f, ".png"), r.rgb);
-    write_png_atomically(frame_file(out / "masks", views[v], f, ".png"), r.mask);
-    write_png_atomically(frame_file(out / "parts", views[v], f, ".png"), r.parts);
-    write_png_atomically(frame_file(out / "dt", views[v], f, ".png"), quantize_dt(dt, cfg.render.dt_scale));
-    OpenPoseFrame op;
-    op.people.push_back(kp);
-    write_openpose_json(frame_file(out / "keypoints", views[v], f, "_keypoints.json"), op);
-    const auto c = Clock::now();
-    {
-      std::lock_guard<std::mutex> lock(time_mutex);
-      render_seconds += std::chrono::duration<double>(b - a).count();
-      write_seconds += std::chrono::duration<double>(c - b).count();
-    }
-    const int n = ++rendered;
-    if (progress) progress({"rendering", n, frames * num_views});
-  });
-  const double render_wall = seconds_since(t_render);
-  // Split the wall time of the parallel loop by the CPU-time shares of its two halves.
-  const double busy = render_seconds + write_seconds;
-  summary.seconds_rendering = busy > 0 ? render_wall * render_seconds / busy : 0;
-  summary.seconds_writing = busy > 0 ? render_wall * write_seconds / busy : 0;
-
-  write_png_atomically((out / "preview.png").string(), preview_sheet(out, views, frames));
-
-  // Ground-truth meshes.
-  for (int f = 0; f < frames; ++f) {
-    write_ply((out / "gt" / ("body_" + dataset_frame_name(f) + ".ply")).string(),
-              with_vertices(ch.body.mesh, posed[f].body));
-    write_ply((out / "gt" / ("cloth_" + dataset_frame_name(f) + ".ply")).string(), with_vertices(cloth_mesh, cloth[f]));
-  }
-
-  // Splits: in each clip one held-out stretch (val, then test) placed at `split_place` of
-  // the clip (1: its end; 0.5: its middle), the rest train, so every split sees every
-  // motion; failed frames left out.
   std::vector<int> failed;
-  for (int f = 0; f < frames; ++f)
+  for (int f = 0; f < motion.frames; ++f)
     if (summary.reports[f].failed) failed.push_back(f);
-  for (int k = 0; k < clips; ++k) {
-    const ClipSplit split = split_clip(segments[k], segment_end(k), cfg.val_fraction, cfg.test_fraction, cfg.split_place);
-    const auto keep = [&](const std::vector<int>& from, std::vector<int>& to) {
-      for (int f : from)
-        if (!summary.reports[f].failed) to.push_back(f);
-    };
-    keep(split.train, summary.train), keep(split.val, summary.val), keep(split.test, summary.test);
-  }
+  split_frames(cfg, motion, summary);
+  write_metrics_json(cfg, ch, motion, cloth, failed, out);
 
-  // metrics.json: deterministic (no wall times; those go to timing.json).
-  {
-    nlohmann::json doc = {{"frames", metric_frames},
-                          {"summary",
-                           {{"simulated", cfg.simulation.enabled},
-                            {"cloth_vertices", cloth_mesh.num_vertices()},
-                            {"frames", frames},
-                            {"failed_frames", failed},
-                            {"time_step", 1.0 / cfg.fps()},
-                            {"substeps", cfg.simulation.substeps},
-                            {"settle_frames", cfg.simulation.settle_frames}}}};
-    if (clips > 1) doc["summary"]["segments"] = segments;  // one clip: the file as before
-    write_text_atomically((out / "metrics.json").string(), doc.dump(2) + "\n");
-  }
-
-  summary.frames = frames;
-  summary.segments = segments;
-  summary.views = num_views;
-  summary.images = frames * num_views;
-  summary.cloth_vertices = cloth_mesh.num_vertices();
+  summary.frames = motion.frames;
+  summary.segments = motion.segments;
+  summary.views = cameras.num_views();
+  summary.images = motion.frames * cameras.num_views();
+  summary.cloth_vertices = ch.cloth->mesh.num_vertices();
   summary.body_vertices = ch.body.mesh.num_vertices();
-
-  // dataset.yaml
-  {
-    std::ostringstream y;
-    y << "# Written by `weft synth` from " << cfg.file << " (layout: docs/DATASET.md).\n"
-      << "format: weft-synth/1\n"
-      << "name: " << cfg.name << "\n"
-      << "seed: " << cfg.seed << "\n"
-      << "fps: " << cfg.fps() << "\n"
-      << "metres_per_unit: " << mpu << "\n"
-      << "frames: " << frames << "\n";
-    if (clips > 1) y << "segments: " << yaml_int_list(segments) << "\n";  // one clip: no key, the file as before
-    y << "views: [";
-    for (int v = 0; v < num_views; ++v) y << (v ? ", " : "") << views[v];
-    y << "]\n"
-      << "image_width: " << cameras[0][0].width << "\n"
-      << "image_height: " << cameras[0][0].height << "\n"
-      << "camera_per_frame: " << (cfg.cameras.kind == CameraRigKind::wild ? "true" : "false") << "\n"
-      << "character: character/character.yaml\n"
-      << "dt_scale: " << cfg.render.dt_scale << "\n"
-      << "splits:\n"
-      << "  train: " << yaml_int_list(summary.train) << "\n"
-      << "  val: " << yaml_int_list(summary.val) << "\n"
-      << "  test: " << yaml_int_list(summary.test) << "\n"
-      << "failed_frames: " << yaml_int_list(failed) << "\n"
-      << simulation_config_yaml(cfg.simulation);
-    write_text_atomically((out / "dataset.yaml").string(), y.str());
-  }
+  write_dataset_yaml(cfg, mpu, motion, cameras, summary, failed, out);
 
   summary.seconds_total = seconds_since(t_start);
-  {
-    nlohmann::json t = {{"seconds_character", summary.seconds_character},
-                        {"seconds_motion", summary.seconds_motion},
-                        {"seconds_simulation", summary.seconds_simulation},
-                        {"seconds_rendering", summary.seconds_rendering},
-                        {"seconds_writing", summary.seconds_writing},
-                        {"seconds_total", summary.seconds_total},
-                        {"views_per_second", summary.views_per_second()}};
-    write_text_atomically((out / "timing.json").string(), t.dump(2) + "\n");
-  }
+  write_timing_json(summary, out);
   return summary;
 }
 

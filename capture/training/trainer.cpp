@@ -224,6 +224,32 @@ class Trainer {
   std::vector<int> window_starts_;  // train frames that start F consecutive train frames
   nn::ProcessGroup& group_ = nn::ProcessGroup::world();
   int shards_ = 1;  // shards per global batch, over all ranks (nn/data_parallel.h)
+
+  // What Trainer::run carries from step to step, in the order run makes it (destroyed in
+  // reverse: the physics loader's future before the prefetcher and the optimiser).
+  struct RunState {
+    int64_t done = 0;  // the step resumed from (0: a fresh start)
+    std::unique_ptr<nn::Optimizer> opt;
+    const StageConfig* stage = nullptr;  // the stage opt belongs to
+    std::unique_ptr<LossLog> log;        // rank 0's
+    int64_t total = 0, last_step = 0;
+    Clock::time_point t0;
+    std::unique_ptr<DatasetPrefetcher> prefetcher;
+    std::unique_ptr<nn::DataParallel> dp;
+    std::future<std::vector<Batch>> next_physics;
+    int64_t next_physics_step = -1;
+    std::map<StageKind, PartTimes> stage_times;
+    const StageConfig* prefetcher_stage = nullptr;
+    const StageConfig* setup_stage = nullptr;  // the stage dp (and the simulator) is set up for
+  };
+  // Trainer::run's stages (next to run).
+  void start_run(const fs::path& ckdir, RunState& st);
+  void open_run_files(const fs::path& run, RunState& st);
+  void set_up_stage(const StageConfig& s, int64_t stage_start, int64_t step, RunState& st);
+  std::vector<Batch> step_shards(int64_t step, const StageConfig& s, int64_t stage_start, RunState& st);
+  void book_step(int64_t step, const StageConfig& s, int64_t stage_start, const StepResult& r, PartTimes& times,
+                 const fs::path& run, RunState& st, TrainSummary& summary,
+                 const std::function<void(const TrainProgress&)>& progress);
 };
 
 CapturePrediction Trainer::forward(const Batch& batch, StageKind stage, bool training, PartTimes* times) {
@@ -617,13 +643,9 @@ void log_validation(const ValidationReport& r) {
                r.penetration_max_mm, 100 * r.penetrating_fraction);
 }
 
-TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progress) {
-  TrainSummary summary;
-  const fs::path run(options_.run), ckdir = run / "checkpoints";
-  // Where to start.
-  int64_t done = 0;
-  std::unique_ptr<nn::Optimizer> opt;
-  const StageConfig* stage = nullptr;
+// Where to start: every rank resumes from rank 0's last checkpoint (with --resume), else
+// from step 1, from the --init-weights weights if given.
+void Trainer::start_run(const fs::path& ckdir, RunState& st) {
   const auto existing = list_checkpoints(ckdir);
   // Every rank resumes from rank 0's choice (a shared file system may show a rank a
   // stale listing).
@@ -639,11 +661,11 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
     const int64_t step = std::stoll(it->second);
     WEFT_CHECK(step <= cfg_.total_steps(), last.string(), ": step ", step, " is past this config's ",
                cfg_.total_steps(), " steps");
-    stage = &cfg_.stage_of(std::max<int64_t>(step, 1));
-    opt = make_optimizer(*stage);
-    const nn::TrainingCheckpoint loaded = nn::load_checkpoint(last.string(), nets_, opt.get(), nullptr);
-    done = loaded.step;
-    spdlog::info("resuming {} at step {} (stage {})", last.string(), done + 1, stage_name(stage->kind));
+    st.stage = &cfg_.stage_of(std::max<int64_t>(step, 1));
+    st.opt = make_optimizer(*st.stage);
+    const nn::TrainingCheckpoint loaded = nn::load_checkpoint(last.string(), nets_, st.opt.get(), nullptr);
+    st.done = loaded.step;
+    spdlog::info("resuming {} at step {} (stage {})", last.string(), st.done + 1, stage_name(st.stage->kind));
     if (const auto s = loaded.metadata.find("weft.shards"); s != loaded.metadata.end() && std::stoi(s->second) != shards_)
       spdlog::warn("{}: written with {} shards per batch, resumed with {}: the continuation is not the computation "
                    "the run started (set `shards` in the config to fix it across rank counts)",
@@ -651,134 +673,154 @@ TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progr
   } else if (options_.resume) {
     spdlog::info("{}: no checkpoint yet: starting from step 1", ckdir.string());
   }
-  if (done == 0 && !options_.init_weights.empty()) {
+  if (st.done == 0 && !options_.init_weights.empty()) {
     load_capture_networks(options_.init_weights, nets_);
     spdlog::info("starting from the weights of {}", options_.init_weights);
   }
-  // Rank 0 writes every file of the run.
-  std::unique_ptr<LossLog> log;
-  if (group_.is_root()) {
-    log = std::make_unique<LossLog>((run / "losses.csv").string(), options_.resume ? done : -1);
-    cut_validation(run / "validation.csv", options_.resume ? done : 0);
-    if (options_.parameter_checksums) cut_validation(run / "parameters.csv", options_.resume ? done : 0);
-    cut_validation(run / "windows.csv", options_.resume ? done : 0);
+}
+
+// Rank 0 writes every file of the run: the loss log, and the CSVs cut back to the step
+// resumed from.
+void Trainer::open_run_files(const fs::path& run, RunState& st) {
+  if (!group_.is_root()) return;
+  st.log = std::make_unique<LossLog>((run / "losses.csv").string(), options_.resume ? st.done : -1);
+  cut_validation(run / "validation.csv", options_.resume ? st.done : 0);
+  if (options_.parameter_checksums) cut_validation(run / "parameters.csv", options_.resume ? st.done : 0);
+  cut_validation(run / "windows.csv", options_.resume ? st.done : 0);
+}
+
+// Stage s starts (or the run resumes in it): its optimiser (a fresh one for a new stage),
+// its data parallelism and, for the physics stage, the garment simulator and the windows.
+void Trainer::set_up_stage(const StageConfig& s, int64_t stage_start, int64_t step, RunState& st) {
+  if (&s != st.stage || !st.opt) {  // a new stage gets a fresh optimiser; a resumed one keeps the loaded
+    if (st.stage) spdlog::info("stage {} done at step {}", stage_name(st.stage->kind), step - 1);
+    st.stage = &s;
+    st.opt = make_optimizer(s);
   }
+  st.setup_stage = &s;
+  st.dp = make_data_parallel(s, *st.opt);
+  spdlog::info("stage {}: steps {}–{}, batch {}, lr {}", stage_name(s.kind), stage_start + 1,
+               stage_start + s.steps, s.batch_size, s.lr);
+  if (s.kind != StageKind::physics) return;
+  WEFT_CHECK(character_.has_cloth(), info_.character, ": the physics stage needs a garment");
+  SynthSimulationConfig sim = read_dataset_simulation(options_.data);
+  sim.max_iterations = cfg_.physics.max_iterations;
+  sim.tolerance = cfg_.physics.tolerance;
+  simulator_ = garment_simulator_factory(character_, sim, info_.fps, cfg_.physics.ray_stiffness);
+  simulation_settings_ = sim;
+  const std::vector<int>& fr = train_->frames();
+  const int F = cfg_.physics.window_frames;
+  window_starts_.clear();
+  for (size_t i = 0; i + F <= fr.size(); ++i)
+    if (fr[i + F - 1] == fr[i] + F - 1 && same_segment(info_, fr[i], fr[i + F - 1])) window_starts_.push_back(fr[i]);
+  WEFT_CHECK(!window_starts_.empty(), options_.data, ": the train split has no run of ", F,
+             " consecutive frames of one clip (physics.window_frames)");
+}
+
+// This process's shards of the step's batch: physics windows, or the prefetcher's next
+// batch (a new prefetcher at each stage).
+std::vector<Batch> Trainer::step_shards(int64_t step, const StageConfig& s, int64_t stage_start, RunState& st) {
+  if (s.kind == StageKind::physics) {
+    // Loaded one step ahead on another thread (a function of the step alone).
+    std::vector<Batch> shards = st.next_physics.valid() && st.next_physics_step == step ? st.next_physics.get()
+                                                                                       : physics_shards(step, s, true);
+    if (step + 1 <= std::min(st.last_step, stage_start + s.steps)) {
+      st.next_physics_step = step + 1;
+      // One loading thread: the networks' kernels keep the cores.
+      st.next_physics = std::async(std::launch::async, [this, step, &s] { return physics_shards(step + 1, s, false); });
+    }
+    return shards;
+  }
+  if (st.prefetcher_stage != &s) {
+    st.prefetcher.reset();
+    PrefetchOptions po;
+    po.batch_size = s.batch_size;
+    po.seed = mix_seed(cfg_.seed, uint64_t(s.kind), 0xBA7C);
+    po.loader_threads = cfg_.loader_threads;
+    po.drop_last = train_->size() >= s.batch_size;
+    po.first_batch = step - stage_start - 1;
+    po.shard = group_.rank();
+    po.shards = group_.size();
+    st.prefetcher = std::make_unique<DatasetPrefetcher>(*train_, po);
+    st.prefetcher_stage = &s;
+  }
+  return local_shards(st.prefetcher->next());
+}
+
+// After a step: the summary's counts, the loss row, checksums, windows, progress and log,
+// then the checkpoint, validation, loss plot and the stage's times as they fall due.
+void Trainer::book_step(int64_t step, const StageConfig& s, int64_t stage_start, const StepResult& r,
+                        PartTimes& times, const fs::path& run, RunState& st, TrainSummary& summary,
+                        const std::function<void(const TrainProgress&)>& progress) {
+  auto t_book = Clock::now();
+  summary.simulation_windows += r.windows;
+  summary.simulation_failures += r.failures;
+  for (const auto& [status, count] : r.failure_statuses) summary.failure_statuses[status] += count;
+  LossRow row;
+  row.step = step;
+  row.stage = stage_name(s.kind);
+  row.terms = r.terms;
+  row.terms["lr"] = st.opt->lr();
+  if (st.log) st.log->append(row);
+  if (options_.parameter_checksums) append_parameter_checksum(run / "parameters.csv", step, nets_, group_);
+  if (group_.is_root() && !r.window_records.empty()) append_windows(run / "windows.csv", step, r.window_records);
+  if (progress && group_.is_root()) progress({step, st.total, row.stage, r.terms});
+  if (step % cfg_.log_every == 0 || step == st.last_step) {
+    std::string msg;
+    for (const auto& [k, v] : r.terms) msg += fmt::format(" {} {:.4g}", k, v);
+    spdlog::info("step {}/{} [{}]{} ({:.2f} s/step)", step, st.total, row.stage, msg,
+                 seconds_since(st.t0) / double(step - st.done));
+  }
+  const bool stage_end = step == stage_start + s.steps;
+  if (step % cfg_.checkpoint_every == 0 || stage_end || step == st.last_step) save(step, s, *st.opt);
+  if ((cfg_.validate_every > 0 && step % cfg_.validate_every == 0) || step == st.total) {
+    if (val_ && group_.is_root()) {  // the other ranks go on to the next step's data and wait there
+      ValidationReport v = validate(*val_, cfg_.validation_samples);
+      v.step = step;
+      append_validation(run / "validation.csv", v);
+      log_validation(v);
+      summary.last_validation = v;
+    }
+  }
+  if (st.log && (step % 25 == 0 || stage_end || step == st.last_step))
+    plot_losses(st.log->rows(), (run / "losses.png").string());
+  times.lap("log, checkpoint, plot, validation", t_book);
+  if ((stage_end || step == st.last_step) && group_.is_root()) log_times(s, times, run);
+}
+
+TrainSummary Trainer::run(const std::function<void(const TrainProgress&)>& progress) {
+  TrainSummary summary;
+  const fs::path run(options_.run), ckdir = run / "checkpoints";
+  RunState st;
+  start_run(ckdir, st);
+  open_run_files(run, st);
   if (shards_ > 1)
     spdlog::info("data parallel: {} ranks, {} shards per global batch ({} per rank), each with its own batch-norm "
                  "statistics; gradients and statistics averaged over the shards",
                  group_.size(), shards_, shards_ / group_.size());
   for (const StageConfig& s : cfg_.stages)  // before the first step, not at the stage
     if (s.steps > 0) check_shards(s);
-  const int64_t total = cfg_.total_steps();
-  const int64_t last_step = options_.stop_after >= 0 ? std::min(total, options_.stop_after) : total;
-  summary.first_step = done + 1;
-  const auto t0 = Clock::now();
-  std::unique_ptr<DatasetPrefetcher> prefetcher;
-  std::unique_ptr<nn::DataParallel> dp;
-  std::future<std::vector<Batch>> next_physics;
-  int64_t next_physics_step = -1;
-  std::map<StageKind, PartTimes> stage_times;
-  const StageConfig* prefetcher_stage = nullptr;
-  const StageConfig* setup_stage = nullptr;
-  for (int64_t step = done + 1; step <= last_step; ++step) {
+  st.total = cfg_.total_steps();
+  st.last_step = options_.stop_after >= 0 ? std::min(st.total, options_.stop_after) : st.total;
+  summary.first_step = st.done + 1;
+  st.t0 = Clock::now();
+  for (int64_t step = st.done + 1; step <= st.last_step; ++step) {
     int64_t stage_start = 0;
     const StageConfig& s = cfg_.stage_of(step, &stage_start);
-    if (&s != setup_stage) {
-      if (&s != stage || !opt) {  // a new stage gets a fresh optimiser; a resumed one keeps the loaded
-        if (stage) spdlog::info("stage {} done at step {}", stage_name(stage->kind), step - 1);
-        stage = &s;
-        opt = make_optimizer(s);
-      }
-      setup_stage = &s;
-      dp = make_data_parallel(s, *opt);
-      spdlog::info("stage {}: steps {}–{}, batch {}, lr {}", stage_name(s.kind), stage_start + 1,
-                   stage_start + s.steps, s.batch_size, s.lr);
-      if (s.kind == StageKind::physics) {
-        WEFT_CHECK(character_.has_cloth(), info_.character, ": the physics stage needs a garment");
-        SynthSimulationConfig sim = read_dataset_simulation(options_.data);
-        sim.max_iterations = cfg_.physics.max_iterations;
-        sim.tolerance = cfg_.physics.tolerance;
-        simulator_ = garment_simulator_factory(character_, sim, info_.fps, cfg_.physics.ray_stiffness);
-        simulation_settings_ = sim;
-        const std::vector<int>& fr = train_->frames();
-        const int F = cfg_.physics.window_frames;
-        window_starts_.clear();
-        for (size_t i = 0; i + F <= fr.size(); ++i)
-          if (fr[i + F - 1] == fr[i] + F - 1 && same_segment(info_, fr[i], fr[i + F - 1])) window_starts_.push_back(fr[i]);
-        WEFT_CHECK(!window_starts_.empty(), options_.data, ": the train split has no run of ", F,
-                   " consecutive frames of one clip (physics.window_frames)");
-      }
-    }
+    if (&s != st.setup_stage) set_up_stage(s, stage_start, step, st);
     const nn::CosineLR schedule(s.lr, s.steps, s.lr * s.final_lr_fraction);
-    opt->set_lr(schedule.lr(step - stage_start - 1));
+    st.opt->set_lr(schedule.lr(step - stage_start - 1));
 
-    PartTimes& times = stage_times[s.kind];
+    PartTimes& times = st.stage_times[s.kind];
     auto t_data = Clock::now();
-    std::vector<Batch> shards;
-    if (s.kind == StageKind::physics) {
-      // Loaded one step ahead on another thread (a function of the step alone).
-      shards = next_physics.valid() && next_physics_step == step ? next_physics.get() : physics_shards(step, s, true);
-      if (step + 1 <= std::min(last_step, stage_start + s.steps)) {
-        next_physics_step = step + 1;
-        // One loading thread: the networks' kernels keep the cores.
-        next_physics = std::async(std::launch::async, [this, step, &s] { return physics_shards(step + 1, s, false); });
-      }
-    } else {
-      if (prefetcher_stage != &s) {
-        prefetcher.reset();
-        PrefetchOptions po;
-        po.batch_size = s.batch_size;
-        po.seed = mix_seed(cfg_.seed, uint64_t(s.kind), 0xBA7C);
-        po.loader_threads = cfg_.loader_threads;
-        po.drop_last = train_->size() >= s.batch_size;
-        po.first_batch = step - stage_start - 1;
-        po.shard = group_.rank();
-        po.shards = group_.size();
-        prefetcher = std::make_unique<DatasetPrefetcher>(*train_, po);
-        prefetcher_stage = &s;
-      }
-      shards = local_shards(prefetcher->next());
-    }
+    const std::vector<Batch> shards = step_shards(step, s, stage_start, st);
     times.lap("data (waiting)", t_data);
-    const StepResult r = train_step(step, s, *opt, *dp, shards, times);
-    auto t_book = Clock::now();
-    summary.simulation_windows += r.windows;
-    summary.simulation_failures += r.failures;
-    for (const auto& [status, count] : r.failure_statuses) summary.failure_statuses[status] += count;
-    LossRow row;
-    row.step = step;
-    row.stage = stage_name(s.kind);
-    row.terms = r.terms;
-    row.terms["lr"] = opt->lr();
-    if (log) log->append(row);
-    if (options_.parameter_checksums) append_parameter_checksum(run / "parameters.csv", step, nets_, group_);
-    if (group_.is_root() && !r.window_records.empty()) append_windows(run / "windows.csv", step, r.window_records);
-    if (progress && group_.is_root()) progress({step, total, row.stage, r.terms});
-    if (step % cfg_.log_every == 0 || step == last_step) {
-      std::string msg;
-      for (const auto& [k, v] : r.terms) msg += fmt::format(" {} {:.4g}", k, v);
-      spdlog::info("step {}/{} [{}]{} ({:.2f} s/step)", step, total, row.stage, msg,
-                   seconds_since(t0) / double(step - done));
-    }
-    const bool stage_end = step == stage_start + s.steps;
-    if (step % cfg_.checkpoint_every == 0 || stage_end || step == last_step) save(step, s, *opt);
-    if ((cfg_.validate_every > 0 && step % cfg_.validate_every == 0) || step == total) {
-      if (val_ && group_.is_root()) {  // the other ranks go on to the next step's data and wait there
-        ValidationReport v = validate(*val_, cfg_.validation_samples);
-        v.step = step;
-        append_validation(run / "validation.csv", v);
-        log_validation(v);
-        summary.last_validation = v;
-      }
-    }
-    if (log && (step % 25 == 0 || stage_end || step == last_step))
-      plot_losses(log->rows(), (run / "losses.png").string());
-    times.lap("log, checkpoint, plot, validation", t_book);
-    if ((stage_end || step == last_step) && group_.is_root()) log_times(s, times, run);
+    const StepResult r = train_step(step, s, *st.opt, *st.dp, shards, times);
+    book_step(step, s, stage_start, r, times, run, st, summary, progress);
   }
-  summary.last_step = last_step;
-  summary.seconds = seconds_since(t0);
-  if (last_step == total && group_.is_root()) nn::save_weights((run / "model.safetensors").string(), nets_);
+  summary.last_step = st.last_step;
+  summary.seconds = seconds_since(st.t0);
+  if (st.last_step == st.total && group_.is_root()) nn::save_weights((run / "model.safetensors").string(), nets_);
   return summary;
 }
 
