@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "capture/plots/svg_line_plot.h"
 #include "graph/atomic_file.h"
 #include "capture/io/png_file.h"
 #include "graph/error.h"
@@ -37,32 +38,9 @@ json distribution_json(const Distribution& d) {
   return {{"mean", d.mean}, {"p95", d.p95}, {"p99", d.p99}, {"max", d.max}, {"count", d.count}};
 }
 
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 // A number for the tables ("—" when not measured).
 std::string num(double v, int decimals) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : "—"; }
 std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "—"; }
-
-// "nice" tick step for a range.
-double tick_step(double range) {
-  if (!(range > 0)) return 1;
-  const double raw = range / 5, p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * p >= raw) return m * p;
-  return 10 * p;
-}
 
 }  // namespace
 
@@ -143,80 +121,6 @@ std::string CaptureEvaluation::to_json() const {
   return j.dump(1) + "\n";
 }
 
-std::string svg_line_plot(const std::string& title, const std::string& unit, const std::vector<int>& ids,
-                          const std::vector<PlotSeries>& series) {
-  const double W = 640, H = 230, left = 64, right = 12, top = 28, bottom = 36;
-  double lo = 0, hi = 0;
-  bool any = false;
-  for (const PlotSeries& s : series)
-    for (double v : s.values)
-      if (std::isfinite(v)) lo = any ? std::min(lo, v) : std::min(0.0, v), hi = any ? std::max(hi, v) : v, any = true;
-  if (!(hi > lo)) hi = lo + 1;
-  const double step = tick_step(hi - lo);
-  hi = std::ceil(hi / step - 1e-9) * step, lo = std::floor(lo / step + 1e-9) * step;
-  const int x0 = ids.empty() ? 0 : ids.front(), x1 = ids.empty() ? 1 : std::max(ids.back(), ids.front() + 1);
-  const auto X = [&](double id) { return left + (id - x0) / double(x1 - x0) * (W - left - right); };
-  const auto Y = [&](double v) { return top + (hi - v) / (hi - lo) * (H - top - bottom); };
-  std::string svg = fmt::format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" "
-      "font-family=\"sans-serif\" font-size=\"11\">\n<text x=\"{}\" y=\"16\" font-size=\"13\" "
-      "font-weight=\"bold\">{}</text>\n",
-      W, H, W, H, left, escape(title));
-  for (double v = lo; v <= hi + 1e-9 * step; v += step)
-    svg += fmt::format(
-        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/><text x=\"{:.1f}\" "
-        "y=\"{:.1f}\" text-anchor=\"end\">{:.4g}</text>\n",
-        left, Y(v), W - right, Y(v), left - 4, Y(v) + 4, v);
-  const int xstep = std::max(1, int(tick_step(x1 - x0)));
-  for (int id = (x0 / xstep) * xstep; id <= x1; id += xstep) {
-    if (id < x0) continue;
-    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(id),
-                       H - bottom + 14, id);
-  }
-  svg += fmt::format(
-      "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">frame</text>\n<text x=\"12\" y=\"{:.1f}\" "
-      "transform=\"rotate(-90 12 {:.1f})\" text-anchor=\"middle\">{}</text>\n"
-      "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>\n",
-      (left + W - right) / 2, H - 4, (top + H - bottom) / 2, (top + H - bottom) / 2, escape(unit), left, top,
-      W - left - right, H - top - bottom);
-  double legend_x = W - right - 8;
-  for (auto it = series.rbegin(); it != series.rend(); ++it) {
-    legend_x -= 7.0 * it->name.size() + 22;
-    svg += fmt::format(
-        "<line x1=\"{:.1f}\" y1=\"12\" x2=\"{:.1f}\" y2=\"12\" stroke=\"{}\" stroke-width=\"2\"/><text x=\"{:.1f}\" "
-        "y=\"16\">{}</text>\n",
-        legend_x, legend_x + 14, it->colour, legend_x + 17, escape(it->name));
-  }
-  for (const PlotSeries& s : series) {
-    WEFT_CHECK(s.values.size() == ids.size(), "svg_line_plot: series '", s.name, "' has ", s.values.size(),
-               " values for ", ids.size(), " frames");
-    std::string run;
-    int run_points = 0;
-    size_t last = 0;  // the run's last point
-    const auto flush = [&] {
-      if (run_points == 1)
-        svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n", X(ids[last]),
-                           Y(s.values[last]), s.colour);
-      else if (run_points > 1)
-        svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
-                           s.colour, run);
-      run.clear(), run_points = 0;
-    };
-    for (size_t i = 0; i < ids.size(); ++i) {
-      if (!std::isfinite(s.values[i])) {
-        if (!s.connect_gaps) flush();
-        continue;
-      }
-      // A gap where captured frame ids jump.
-      if (run_points && ids[i] - ids[last] != int(i - last)) flush();
-      run += fmt::format("{:.1f},{:.1f} ", X(ids[i]), Y(s.values[i]));
-      ++run_points, last = i;
-    }
-    flush();
-  }
-  return svg + "</svg>\n";
-}
-
 std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, const std::string& dir) {
   fs::create_directories(dir);
   // Overlays of an earlier report in this folder would be left beside this one's.
@@ -243,22 +147,22 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   for (const FrameEvaluation& f : e.frames) ids.push_back(f.id);
   const auto col = [&](auto get) { return column(e, get); };
   std::string h;
-  h += "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>weft eval: " + escape(e.options.prediction) +
+  h += "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>weft eval: " + html_escape(e.options.prediction) +
        "</title>\n<style>body{font-family:sans-serif;max-width:1400px;margin:1em auto;padding:0 1em}"
        "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
        "th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}.note{color:#a40}"
        "img{max-width:100%;border:1px solid #ccc}code{background:#f5f5f5}</style></head><body>\n";
-  h += "<h1>weft eval</h1>\n<p>prediction <code>" + escape(e.options.prediction) + "</code><br>data <code>" +
-       escape(e.options.data) + "</code><br>input view <b>" + escape(e.view) + "</b> of " +
+  h += "<h1>weft eval</h1>\n<p>prediction <code>" + html_escape(e.options.prediction) + "</code><br>data <code>" +
+       html_escape(e.options.data) + "</code><br>input view <b>" + html_escape(e.view) + "</b> of " +
        std::to_string(e.views.size()) + " views; " + std::to_string(e.frames.size()) + " captured frames; " +
        (e.options.gt_translation ? "<b>ground-truth global translation applied</b> (--gt-translation)"
                                  : "predicted global translation") +
        (e.options.iou_every == 1 ? std::string("; IoU on every frame")
                                  : fmt::format("; IoU on one frame in {}", e.options.iou_every)) +
        "; cloth material from " +
-       (e.synth_config.empty() ? std::string("— (none)") : "<code>" + escape(e.synth_config) + "</code>") +
+       (e.synth_config.empty() ? std::string("— (none)") : "<code>" + html_escape(e.synth_config) + "</code>") +
        fmt::format("; {:.1f} s.</p>\n", e.seconds);
-  for (const std::string& n : e.notes) h += "<p class=\"note\">" + escape(n) + "</p>\n";
+  for (const std::string& n : e.notes) h += "<p class=\"note\">" + html_escape(n) + "</p>\n";
 
   h += "<h2>Summary</h2>\n<table><tr><th>metric</th><th>prediction</th><th>ground truth (same measure)</th>"
        "<th>unit</th></tr>\n";
@@ -327,8 +231,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
        "outline white) beside the ground truth drawn the same way (right).</p>\n";
   for (const EvaluationOverlay& o : e.overlays)
-    h += "<h3>" + escape(o.label) + " frame " + std::to_string(o.id) + " (" + escape(o.ranked_by) +
-         ")</h3>\n<img src=\"" + overlay_file(o) + "\" alt=\"" + escape(o.label) + " frame\">\n";
+    h += "<h3>" + html_escape(o.label) + " frame " + std::to_string(o.id) + " (" + html_escape(o.ranked_by) +
+         ")</h3>\n<img src=\"" + overlay_file(o) + "\" alt=\"" + html_escape(o.label) + " frame\">\n";
 
   h += "<h2>Per-frame table</h2>\n<table><tr><th>frame</th><th>cloth mm</th><th>body mm</th><th>MPJPE mm</th>"
        "<th>pivot mm</th><th>pen. mean mm</th><th>pen. max mm</th><th>OOB mean N</th><th>OOB max N</th>"

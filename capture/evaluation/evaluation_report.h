@@ -9,22 +9,11 @@
 #include <vector>
 
 #include "capture/evaluation/capture_evaluation.h"
+#include "capture/plots/svg_line_plot.h"
 
 namespace weft::capture {
 
 // Creates `dir` if needed; returns the paths written.
 std::vector<std::string> write_evaluation_report(const CaptureEvaluation& evaluation, const std::string& dir);
-
-// A line plot as an inline SVG element: one polyline per series over frame ids (a jump in
-// the ids, and a NaN value unless the series connects gaps, breaks the line; isolated
-// points are drawn as dots), axes with ticks, a legend.
-struct PlotSeries {
-  std::string name;
-  std::vector<double> values;  // one per id
-  std::string colour;          // CSS colour
-  bool connect_gaps = false;   // a series measured on some frames only (IoU every N-th)
-};
-std::string svg_line_plot(const std::string& title, const std::string& unit, const std::vector<int>& ids,
-                          const std::vector<PlotSeries>& series);
 
 }  // namespace weft::capture

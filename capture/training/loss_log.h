@@ -1,5 +1,6 @@
 #pragma once
-// The training run's record of losses, RUN/losses.csv, and its plot RUN/losses.png.
+// The training run's record of losses, RUN/losses.csv (its plot, RUN/losses.png, is
+// capture/plots/loss_plot.h's plot_losses).
 //
 // CSV: a header `step,stage,<term>...` (terms in the order first seen), one row per
 // logged step, values printed with %.9g (nan, inf, -inf for non-finite values), an
@@ -13,13 +14,10 @@
 #include <string>
 #include <vector>
 
+#include "capture/plots/loss_plot.h"
+
 namespace weft::capture {
 
-struct LossRow {
-  int64_t step = 0;                      // global step, 1-based, strictly increasing
-  std::string stage;                     // "pose", "warmup", "physics" (no commas)
-  std::map<std::string, double> terms;   // e.g. {"total": .., "landmarks": .., "silhouette": ..}
-};
 
 class LossLog {
  public:
@@ -54,15 +52,5 @@ class LossLog {
 // number of cells, a step that is not an integer or not increasing, a value that is not
 // a number) is a weft::Error "losses.csv:LINE: what".
 std::vector<LossRow> read_loss_log(const std::string& path);
-
-// Draws the loss curves into a PNG (OpenCV only), written atomically: one panel per
-// term ("total" first), x = step shared by all panels, y = log10 of the value. Raw
-// values are a thin light line, a centred moving average of log10 (within each stage) a
-// bold one; stages are named in a bar on top, shaded alternately and separated by dashed
-// lines. Values <= 0 are skipped and nan/inf are marked in red at the bottom of the
-// panel; both are counted in the panel's caption, next to the last smoothed value and
-// the minimum. Errors: a size under 320x240, a failed write.
-void plot_losses(const std::vector<LossRow>& rows, const std::string& png_path,
-                 const std::string& title = "weft train", int width = 1200, int height = 800);
 
 }  // namespace weft::capture
