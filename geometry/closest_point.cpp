@@ -6,54 +6,42 @@
 
 namespace weft {
 
-// Region-based closest point (Ericson, Real-Time Collision Detection, §5.1.5).
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                           const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                          Eigen::Vector3d& bary) {
+                                          Eigen::Vector3d& bary, TriangleFeature* feature) {
+  const auto found = [&](TriangleFeature f, const Eigen::Vector3d& weights, const Eigen::Vector3d& q) {
+    if (feature) *feature = f;
+    bary = weights;
+    return q;
+  };
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) {
-    bary << 1, 0, 0;
-    return a;
-  }
+  if (d1 <= 0 && d2 <= 0) return found(TriangleFeature::vertex0, {1, 0, 0}, a);
   const Eigen::Vector3d bp = p - b;
   const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) {
-    bary << 0, 1, 0;
-    return b;
-  }
+  if (d3 >= 0 && d4 <= d3) return found(TriangleFeature::vertex1, {0, 1, 0}, b);
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
     const double v = d1 / (d1 - d3);
-    bary << 1 - v, v, 0;
-    return a + v * ab;
+    return found(TriangleFeature::edge01, {1 - v, v, 0}, a + v * ab);
   }
   const Eigen::Vector3d cp = p - c;
   const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) {
-    bary << 0, 0, 1;
-    return c;
-  }
+  if (d6 >= 0 && d5 <= d6) return found(TriangleFeature::vertex2, {0, 0, 1}, c);
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const double w = d2 / (d2 - d6);
-    bary << 1 - w, 0, w;
-    return a + w * ac;
+    return found(TriangleFeature::edge20, {1 - w, 0, w}, a + w * ac);
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
     const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    bary << 0, 1 - w, w;
-    return b + w * (c - b);
+    return found(TriangleFeature::edge12, {0, 1 - w, w}, b + w * (c - b));
   }
   const double sum = va + vb + vc;
-  if (!(sum > 0)) {  // degenerate (zero-area) triangle: fall back to its first vertex
-    bary << 1, 0, 0;
-    return a;
-  }
+  if (!(sum > 0)) return found(TriangleFeature::vertex0, {1, 0, 0}, a);  // zero area: the first vertex
   const double v = vb / sum, w = vc / sum;
-  bary << 1 - v - w, v, w;
-  return a + v * ab + w * ac;
+  return found(TriangleFeature::face, {1 - v - w, v, w}, a + v * ab + w * ac);
 }
 
 ClosestTriangleQuery::ClosestTriangleQuery(const Vertices& V, const Faces& F)

@@ -2,7 +2,7 @@
 // Closest points on triangle meshes: the point–triangle primitive and a query structure
 // for many points against one mesh (used by attachment, weight transfer and the
 // penetration measures). physics::BodyMesh keeps its own AABB tree with signed distances
-// and refits: the simulator's obstacle query, tuned for the drape.
+// and refits (the simulator's obstacle query) on the same point–triangle primitive.
 #include <Eigen/Core>
 #include <vector>
 
@@ -10,10 +10,18 @@
 
 namespace weft {
 
-// Closest point on triangle (a, b, c) to p, with its barycentric weights (sum 1, all ≥ 0).
+// The feature of a triangle (a, b, c) a closest point lies on: its interior, an edge
+// (edge01 joins a and b) or a vertex.
+enum class TriangleFeature { face, edge01, edge12, edge20, vertex0, vertex1, vertex2 };
+
+// Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection,
+// §5.1.5), with its barycentric weights (sum 1, all ≥ 0) and, when asked, the feature it
+// lies on. A zero-area triangle gives its first vertex. The one point–triangle primitive
+// of weft: the closest-point queries here and the simulator's body obstacle
+// (physics::BodyMesh) both use it.
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                           const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                          Eigen::Vector3d& barycentric);
+                                          Eigen::Vector3d& barycentric, TriangleFeature* feature = nullptr);
 
 struct ClosestPoint {
   int face = -1;

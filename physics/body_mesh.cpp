@@ -5,56 +5,12 @@
 #include <cmath>
 #include <map>
 
+#include "geometry/closest_point.h"
 #include "graph/error.h"
 
 namespace weft::physics {
 
 namespace {
-
-enum class Region { face, edge01, edge12, edge20, vertex0, vertex1, vertex2 };
-
-// Closest point to p on triangle (a, b, c) and the feature it lies on (Ericson,
-// Real-Time Collision Detection, 5.1.5).
-Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                    const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                    Region& region) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) {
-    region = Region::vertex0;
-    return a;
-  }
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) {
-    region = Region::vertex1;
-    return b;
-  }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    region = Region::edge01;
-    return a + (d1 / (d1 - d3)) * ab;
-  }
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) {
-    region = Region::vertex2;
-    return c;
-  }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    region = Region::edge20;
-    return a + (d2 / (d2 - d6)) * ac;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    region = Region::edge12;
-    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  region = Region::face;
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
 
 double box_distance2(const Eigen::Vector3d& p, const Eigen::Vector3d& lo,
                      const Eigen::Vector3d& hi) {
@@ -210,7 +166,7 @@ ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_
   if (nodes_.empty()) return best;
   double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance
                                                : std::numeric_limits<double>::infinity();
-  Region best_region = Region::face;
+  TriangleFeature best_region = TriangleFeature::face;
   int stack[128];
   int top = 0;
   stack[top++] = 0;
@@ -221,10 +177,11 @@ ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_
       for (int k = n.begin; k < n.end; ++k) {
         if (!accept(active_[k])) continue;
         const auto& t = faces_[active_[k]];
-        Region region;
-        const Eigen::Vector3d p = closest_on_triangle(
-            x, vertices_.row(t[0]).transpose(), vertices_.row(t[1]).transpose(),
-            vertices_.row(t[2]).transpose(), region);
+        TriangleFeature region;
+        Eigen::Vector3d barycentric;
+        const Eigen::Vector3d p = closest_point_on_triangle(x, vertices_.row(t[0]).transpose(),
+                                                            vertices_.row(t[1]).transpose(),
+                                                            vertices_.row(t[2]).transpose(), barycentric, &region);
         const double d2 = (x - p).squaredNorm();
         if (d2 < best_d2) {
           best_d2 = d2;
@@ -249,18 +206,18 @@ ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_
   if (best.face < 0) return best;
   const auto& t = faces_[best.face];
   switch (best_region) {
-    case Region::face: best.normal = face_normals_[best.face]; break;
-    case Region::edge01: best.normal = edge_normals_[best.face][0]; break;
-    case Region::edge12: best.normal = edge_normals_[best.face][1]; break;
-    case Region::edge20: best.normal = edge_normals_[best.face][2]; break;
-    case Region::vertex0: best.normal = vertex_normals_[t[0]]; break;
-    case Region::vertex1: best.normal = vertex_normals_[t[1]]; break;
-    case Region::vertex2: best.normal = vertex_normals_[t[2]]; break;
+    case TriangleFeature::face: best.normal = face_normals_[best.face]; break;
+    case TriangleFeature::edge01: best.normal = edge_normals_[best.face][0]; break;
+    case TriangleFeature::edge12: best.normal = edge_normals_[best.face][1]; break;
+    case TriangleFeature::edge20: best.normal = edge_normals_[best.face][2]; break;
+    case TriangleFeature::vertex0: best.normal = vertex_normals_[t[0]]; break;
+    case TriangleFeature::vertex1: best.normal = vertex_normals_[t[1]]; break;
+    case TriangleFeature::vertex2: best.normal = vertex_normals_[t[2]]; break;
   }
-  best.face_interior = best_region == Region::face;
-  const int edge = best_region == Region::edge01   ? 0
-                   : best_region == Region::edge12 ? 1
-                   : best_region == Region::edge20 ? 2
+  best.face_interior = best_region == TriangleFeature::face;
+  const int edge = best_region == TriangleFeature::edge01   ? 0
+                   : best_region == TriangleFeature::edge12 ? 1
+                   : best_region == TriangleFeature::edge20 ? 2
                                                    : -1;
   if (edge >= 0) {
     best.on_edge = true;
