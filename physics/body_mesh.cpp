@@ -52,6 +52,25 @@ BodyMesh::BodyMesh(Eigen::MatrixX3d vertices, std::vector<std::array<int, 3>> fa
               .first->second;
     }
   num_edges_ = static_cast<int>(edge_id.size());
+  edge_vertices_.assign(num_edges_, {-1, -1});
+  std::vector<int> edge_faces(num_edges_, 0);
+  for (const auto& [ends, e] : edge_id) edge_vertices_[e] = {ends.first, ends.second};
+  for (int f : active_)
+    for (int e : face_edges_[f]) ++edge_faces[e];
+  edge_weights_.resize(num_edges_);
+  vertex_weights_.assign(nv, 1);
+  for (int e = 0; e < num_edges_; ++e) {
+    edge_weights_[e] = 1 - edge_faces[e];
+    for (int v : edge_vertices_[e]) --vertex_weights_[v];  // − E_v
+  }
+  for (int f : active_)
+    for (int v : faces_[f]) ++vertex_weights_[v];  // + F_v
+  // A vertex of no active face is in no sum (1 + 0 − 0 would count it once).
+  std::vector<char> used(nv, 0);
+  for (int f : active_)
+    for (int v : faces_[f]) used[v] = 1;
+  for (int v = 0; v < nv; ++v)
+    if (!used[v]) vertex_weights_[v] = 0;
   compute_normals();
 }
 
@@ -231,6 +250,30 @@ ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_
 
 ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance) const {
   return closest_point_where(x, max_distance, [](int) { return true; });
+}
+
+void BodyMesh::faces_within(const Eigen::Vector3d& x, double max_distance, std::vector<int>& out) const {
+  if (nodes_.empty()) return;
+  const double max_d2 = max_distance * max_distance;
+  int stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[stack[--top]];
+    if (box_distance2(x, n.lo, n.hi) >= max_d2) continue;
+    if (n.left >= 0) {
+      stack[top++] = n.left;
+      stack[top++] = n.right;
+      continue;
+    }
+    for (int k = n.begin; k < n.end; ++k) {
+      const auto& t = faces_[active_[k]];
+      Eigen::Vector3d barycentric;
+      const Eigen::Vector3d p = closest_point_on_triangle(x, vertices_.row(t[0]).transpose(), vertices_.row(t[1]).transpose(),
+                                                          vertices_.row(t[2]).transpose(), barycentric);
+      if ((x - p).squaredNorm() < max_d2) out.push_back(active_[k]);
+    }
+  }
 }
 
 ClosestPoint BodyMesh::closest_point_facing_away(const Eigen::Vector3d& x, double max_distance,

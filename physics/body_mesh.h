@@ -52,6 +52,19 @@ class BodyMesh {
                                          const Eigen::Vector3d& facing, double max_cos) const;
   // Unit normal of face f.
   const Eigen::Vector3d& face_normal(int f) const { return face_normals_[f]; }
+  // Appends to `faces` every active face closer to x than max_distance (m), in no order.
+  void faces_within(const Eigen::Vector3d& x, double max_distance, std::vector<int>& faces) const;
+  // The mesh as a cell complex of its active faces, for sums over its features:
+  // the ids of face f's edges (k, k+1), an edge's two vertices, and the inclusion–exclusion
+  // weights that make Σ_faces − … count each feature's neighbourhood once: an edge shared
+  // by m active faces weighs 1 − m (−1 inside the surface, 0 on a boundary), a vertex with
+  // F active faces and E edges weighs 1 + F − E (1 inside, 0 on a boundary). A point whose
+  // closest feature is σ then finds weights summing to 1 over σ and the features
+  // containing it (CollisionEnergy's smooth creases).
+  const std::array<int, 3>& face_edges(int f) const { return face_edges_[f]; }
+  const std::array<int, 2>& edge_vertices(int e) const { return edge_vertices_[e]; }
+  int edge_weight(int e) const { return edge_weights_[e]; }
+  int vertex_weight(int v) const { return vertex_weights_[v]; }
 
  private:
   struct Node {
@@ -74,6 +87,8 @@ class BodyMesh {
   std::vector<std::array<Eigen::Vector3d, 3>> edge_normals_;  // per face, edge (k, k+1)
   std::vector<std::array<int, 3>> face_edges_;  // per active face, the id of edge (k, k+1)
   int num_edges_ = 0;
+  std::vector<std::array<int, 2>> edge_vertices_;  // per edge id
+  std::vector<int> edge_weights_, vertex_weights_;  // see face_edges()
 };
 
 }  // namespace weft::physics

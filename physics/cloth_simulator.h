@@ -46,6 +46,9 @@ struct SimulationSettings {
   // crease or gap, faces turned more than this from its closest face
   // (CollisionEnergy::set_second_sheet_angle).
   double collision_second_sheet_deg = 0.0;
+  // Outside a body, the penalty summed over its faces, edges and vertices in the band
+  // (CollisionEnergy::set_smooth_creases): no kink on a concave crease's medial surface.
+  bool collision_smooth_creases = false;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
   // creeps at under ε_v (measured 0.48 mm/s on a 20° slope with μ = 0.5). 1e-3 m/s (IPC's

@@ -1,8 +1,11 @@
 #include "physics/collision_energy.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
+#include "geometry/closest_point.h"
 #include "graph/error.h"
 
 namespace weft::physics {
@@ -88,6 +91,101 @@ double CollisionEnergy::add_penalty(int i, const DistanceSample& s, Eigen::Vecto
   return c / 6.0 * gap * gap * gap;
 }
 
+namespace {
+
+// Unsigned distance of x to a point p of a feature, with the feature's curvature: none on a
+// face's interior, none along an edge (direction e, unit) the closest point slides on.
+DistanceSample unsigned_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& p, const Eigen::Vector3d* edge) {
+  DistanceSample s;
+  const Eigen::Vector3d r = x - p;
+  s.distance = r.norm();
+  if (!(s.distance > 1e-12)) return s;  // on the feature: no direction; the caller skips it
+  s.gradient = r / s.distance;
+  s.hessian = Eigen::Matrix3d::Identity() - s.gradient * s.gradient.transpose();
+  if (edge) s.hessian -= *edge * edge->transpose();
+  s.hessian /= s.distance;
+  return s;
+}
+
+}  // namespace
+
+void CollisionEnergy::accumulate_penalty(double w, const DistanceSample& s, double& e, Eigen::Vector3d& g,
+                                         Eigen::Matrix3d& h) const {
+  if (!(s.distance < thickness_) || w == 0) return;
+  const double gap = thickness_ - s.distance;
+  const double c = k_ / thickness_;
+  const double de = 0.5 * c * gap * gap;
+  e += w * c / 6.0 * gap * gap * gap;
+  g -= w * de * s.gradient;
+  h += w * (c * gap * (s.gradient * s.gradient.transpose()) - de * s.hessian);
+}
+
+double CollisionEnergy::add_feature_sum(int i, const Eigen::Vector3d& x, const BodyMesh& body, Eigen::VectorXd* g,
+                                        SparseHessian* H) const {
+  thread_local std::vector<int> faces, edges, vertices;
+  faces.clear();
+  edges.clear();
+  vertices.clear();
+  body.faces_within(x, thickness_, faces);
+  double e = 0;
+  Eigen::Vector3d gi = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d hi = Eigen::Matrix3d::Zero();
+  const Eigen::MatrixX3d& V = body.vertices();
+  auto vertex = [&](int v) -> Eigen::Vector3d { return V.row(v).transpose(); };
+  for (int f : faces) {
+    const auto& t = body.faces()[f];
+    Eigen::Vector3d barycentric;
+    TriangleFeature feature;
+    const Eigen::Vector3d p = closest_point_on_triangle(x, vertex(t[0]), vertex(t[1]), vertex(t[2]), barycentric, &feature);
+    Eigen::Vector3d along;
+    const Eigen::Vector3d* edge = nullptr;
+    if (feature == TriangleFeature::edge01 || feature == TriangleFeature::edge12 || feature == TriangleFeature::edge20) {
+      const int k = feature == TriangleFeature::edge01 ? 0 : feature == TriangleFeature::edge12 ? 1 : 2;
+      along = (vertex(t[(k + 1) % 3]) - vertex(t[k])).normalized();
+      edge = &along;
+    }
+    const DistanceSample s = unsigned_distance(x, p, feature == TriangleFeature::face ? nullptr : edge);
+    // On a face's interior the distance is the plane's: no curvature.
+    if (feature == TriangleFeature::face) {
+      DistanceSample plane = s;
+      plane.hessian.setZero();
+      accumulate_penalty(1.0, plane, e, gi, hi);
+    } else {
+      accumulate_penalty(1.0, s, e, gi, hi);
+    }
+    for (int k = 0; k < 3; ++k) {
+      edges.push_back(body.face_edges(f)[k]);
+      vertices.push_back(t[k]);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  for (int ed : edges) {
+    const int w = body.edge_weight(ed);
+    if (w == 0) continue;
+    const Eigen::Vector3d a = vertex(body.edge_vertices(ed)[0]), b = vertex(body.edge_vertices(ed)[1]);
+    const Eigen::Vector3d ab = b - a;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((x - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    const Eigen::Vector3d along = len2 > 0 ? Eigen::Vector3d(ab / std::sqrt(len2)) : Eigen::Vector3d::Zero();
+    const bool inside = t > 0 && t < 1;
+    accumulate_penalty(w, unsigned_distance(x, a + t * ab, inside ? &along : nullptr), e, gi, hi);
+  }
+  for (int v : vertices)
+    if (const int w = body.vertex_weight(v); w != 0) accumulate_penalty(w, unsigned_distance(x, vertex(v), nullptr), e, gi, hi);
+  if (g) g->segment<3>(3 * i) += gi;
+  if (H) {
+    if (project_hessian_) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(hi);
+      hi = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+    }
+    H->add_diagonal_block(i, hi);
+  }
+  return e;
+}
+
 double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
                                  SparseHessian* H) const {
   double energy = 0;
@@ -101,6 +199,10 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
       const DistanceSample s = signed_distance(cp, xi);
       c.x_ref = xi;
       c.d_ref = s.distance;
+      if (smooth_creases_ && s.distance > 0 && s.distance < thickness_) {
+        energy += add_feature_sum(i, xi, *bodies_[b], g, H);
+        continue;
+      }
       energy += add_penalty(i, s, g, H);
       if (second_sheet_cos_ <= 1 && cp.face >= 0 && s.distance < thickness_) {
         const ClosestPoint other = bodies_[b]->closest_point_facing_away(
@@ -137,6 +239,30 @@ void CollisionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::
       limit(s);
     }
   }
+}
+
+std::string CollisionEnergy::describe_vertex(const Eigen::VectorXd& x, int i) const {
+  const Eigen::Vector3d xi = x.segment<3>(3 * i);
+  std::string out;
+  char buf[160];
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    const ClosestPoint cp = bodies_[b]->closest_point(xi);
+    if (cp.face < 0) continue;
+    const char* where = cp.face_interior ? "interior" : cp.on_edge ? "edge" : "vertex";
+    std::snprintf(buf, sizeof buf, "[body %zu face %d %s d %.3f mm", b, cp.face, where, 1e3 * cp.distance);
+    out += buf;
+    const Eigen::Vector3d& n = bodies_[b]->face_normal(cp.face);
+    for (double deg : {5.0, 20.0, second_sheet_deg_}) {
+      if (!(deg > 0)) continue;
+      const ClosestPoint o = bodies_[b]->closest_point_facing_away(xi, 2 * thickness_, n, std::cos(deg * M_PI / 180));
+      if (o.face < 0) continue;
+      const double angle = std::acos(std::clamp(n.dot(bodies_[b]->face_normal(o.face)), -1.0, 1.0)) * 180 / M_PI;
+      std::snprintf(buf, sizeof buf, "; >%.0f°: face %d at %.1f° d %.3f mm", deg, o.face, angle, 1e3 * o.distance);
+      out += buf;
+    }
+    out += "]";
+  }
+  return out;
 }
 
 double CollisionEnergy::min_signed_distance(const Eigen::Vector3d& x) const {

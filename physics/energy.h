@@ -47,6 +47,14 @@ class Energy {
     limit_vertex_steps(x, dx, limits);
     return limits.size() > 0 ? limits.minCoeff() : 1.0;
   }
+  // What this energy sees at vertex i (for WEFT_NEWTON_TRACE, which prints it for the
+  // vertex with the largest residual): e.g. the collision's closest face and feature.
+  // Empty when there is nothing to say.
+  virtual std::string describe_vertex(const Eigen::VectorXd& x, int i) const {
+    (void)x;
+    (void)i;
+    return {};
+  }
   // Called once at the start of each time step, before any evaluate().
   virtual void begin_step(const Eigen::VectorXd& x_start) { (void)x_start; }
   // Element Hessians are projected to PSD unless this is switched off (for checking the

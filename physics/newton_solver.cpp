@@ -260,6 +260,10 @@ void NewtonSolver::print_trace(int it, const Eigen::VectorXd& x, const Eigen::Ve
     std::snprintf(buf, sizeof buf, " %s %.3g", en->name().c_str(), r);
     shares += buf;
   }
+  for (const Energy* en : energies_) {
+    const std::string about = en->describe_vertex(x, worst);
+    if (!about.empty()) shares += " " + en->name() + " " + about;
+  }
   // Where the full (filtered) step met more curvature than the quadratic model: per energy,
   // its change along α₀·d minus the linear prediction α₀·∇E_k·d, against the model's total
   // ½α₀²·dᵀHd. Only for iterations that back-tracked.

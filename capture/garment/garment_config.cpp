@@ -21,9 +21,11 @@ void parse_simulation_config(const StrictYaml& y, const YAML::Node& n, SynthSimu
     s.settle_frames = static_cast<int>(y.number(n["settle_frames"], "simulation.settle_frames", 0, 10000));
   if (const YAML::Node m = n["material"]) physics::read_cloth_material(y, m, "simulation.material", s.material);
   if (const YAML::Node c = n["collision"]) {
-    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness", "second_sheet_deg"});
+    y.check_keys(c, "simulation.collision.", {"thickness", "stiffness", "second_sheet_deg", "smooth_creases"});
     if (c["second_sheet_deg"])
       s.collision_second_sheet_deg = y.number(c["second_sheet_deg"], "simulation.collision.second_sheet_deg", 0, 179);
+    if (c["smooth_creases"])
+      s.collision_smooth_creases = y.get<bool>(c["smooth_creases"], "simulation.collision.smooth_creases", "true or false");
     if (c["thickness"]) s.collision_thickness = y.positive(c["thickness"], "simulation.collision.thickness");
     if (c["stiffness"]) s.collision_stiffness = y.positive(c["stiffness"], "simulation.collision.stiffness");
   }
@@ -64,7 +66,8 @@ std::string simulation_config_yaml(const SynthSimulationConfig& s) {
          "  material: " + physics::cloth_material_yaml(s.material) + "\n" +
          "  collision: {thickness: " + yaml_number(s.collision_thickness) +
          ", stiffness: " + yaml_number(s.collision_stiffness) +
-         ", second_sheet_deg: " + yaml_number(s.collision_second_sheet_deg) + "}\n" +
+         ", second_sheet_deg: " + yaml_number(s.collision_second_sheet_deg) +
+         ", smooth_creases: " + (s.collision_smooth_creases ? "true" : "false") + "}\n" +
          "  pins: {stiffness: " + yaml_number(s.pin_stiffness) + "}\n" +
          "  friction: " + yaml_number(s.friction) + "\n" +
          "  solver: {max_iterations: " + std::to_string(s.max_iterations) + ", tolerance: " + yaml_number(s.tolerance) +

@@ -32,6 +32,9 @@ struct SynthSimulationConfig {
   double collision_thickness = 0.004;  // m
   double collision_stiffness = 1.0e4;  // N/m
   double collision_second_sheet_deg = 45.0;  // both sheets of a crease (physics::SimulationSettings); 0: off (measured)
+  // The penalty summed over the body's faces, edges and vertices in the band, so the
+  // medial surface of a concave crease is no kink (physics::CollisionEnergy::set_smooth_creases).
+  bool collision_smooth_creases = true;  // (measured)
   double pin_stiffness = 1.0e4;        // N/m
   double friction = 0.3;               // Coulomb coefficient of the garment on the body (skin)
   // Newton iterations per step. A body stepping into the skirt cuts every step through

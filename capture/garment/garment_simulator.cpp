@@ -27,6 +27,7 @@ physics::SimulationSettings garment_simulation_settings(const SynthSimulationCon
   settings.collision_thickness = s.collision_thickness;
   settings.collision_stiffness = s.collision_stiffness;
   settings.collision_second_sheet_deg = s.collision_second_sheet_deg;
+  settings.collision_smooth_creases = s.collision_smooth_creases;
   settings.pin_stiffness = s.pin_stiffness;
   settings.newton.max_iterations = s.max_iterations;
   settings.newton.tolerance = s.tolerance;
