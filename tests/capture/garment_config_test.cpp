@@ -36,6 +36,7 @@ SynthSimulationConfig unusual_settings() {
   s.tolerance = 3e-4;
   s.max_penetration = 0.02;
   s.collision_second_sheet_deg = 30.5;
+  s.collision_smooth_creases = !SynthSimulationConfig{}.collision_smooth_creases;
   s.per_vertex_step_limits = !SynthSimulationConfig{}.per_vertex_step_limits;
   s.max_body_motion = 0.0125;
   s.max_step_halvings = 2;
@@ -93,6 +94,9 @@ TEST(GarmentConfig, BadFailedFrameSettingsNameTheLineAndTheKey) {
   expect_error([&] { parse("  max_step_halvings: -1\n"); }, {"recipe.yaml:3", "simulation.max_step_halvings"});
   expect_error([&] { parse("  collision: {second_sheet_deg: 180}\n"); },
                {"recipe.yaml:3", "simulation.collision.second_sheet_deg"});
+  EXPECT_FALSE(parse("  collision: {smooth_creases: false}\n").collision_smooth_creases);
+  expect_error([&] { parse("  collision: {smooth_creases: 1.5}\n"); },
+               {"recipe.yaml:3", "simulation.collision.smooth_creases", "true or false"});
   expect_error([&] { parse("  solver: {per_vertex_step_limits: maybe}\n"); },
                {"recipe.yaml:3", "simulation.solver.per_vertex_step_limits", "true or false"});
   expect_error([&] { parse("  solver: {per_vertex_step_limit: true}\n"); },
