@@ -159,6 +159,10 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
   int iterations = 0;
   for (int halvings = 0;; ++halvings) {
     const int n = substeps << halvings;
+    // The last attempt runs every sub-step even after one fails, so a failed frame still
+    // hands on a state at the frame's end, beside the body where the frame leaves it
+    // (breaking off would hand on a state from partway through the frame).
+    const bool last_attempt = halvings >= settings_.max_step_halvings;
     const double hs = h / n;
     result.x = x_prev;
     result.status = StepStatus::converged;
@@ -181,9 +185,9 @@ StepResult ClothSimulator::step(const Positions& x_prev2, const Positions& x_pre
       result.gradient_norm = r.gradient_norm;
       result.energy = r.energy;
       result.last = std::move(r);
-      if (result.status != StepStatus::converged) break;  // retried below, or reported
+      if (result.status != StepStatus::converged && !last_attempt) break;  // retried below
     }
-    if (result.status == StepStatus::converged || halvings >= settings_.max_step_halvings) break;
+    if (result.status == StepStatus::converged || last_attempt) break;
   }
   result.newton_iterations = iterations;
   last_substeps_ = result.substeps;

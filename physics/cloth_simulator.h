@@ -117,7 +117,8 @@ class ClothSimulator {
   // The layer S(x_{t−2}, x_{t−1}, body_{t−1}, body_t) → x_t: the velocity comes from the
   // two previous states, body 0 moves linearly from body_prev to body_now over the
   // settings' sub-steps (pass null pointers for static obstacles). A failed frame is
-  // retried with halved steps (SimulationSettings::max_step_halvings).
+  // retried with halved steps (SimulationSettings::max_step_halvings); the last attempt
+  // runs all its sub-steps whatever fails, so the state returned is at the frame's end.
   StepResult step(const Positions& x_prev2, const Positions& x_prev,
                   const Eigen::MatrixX3d* body_prev = nullptr,
                   const Eigen::MatrixX3d* body_now = nullptr);

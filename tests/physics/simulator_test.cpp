@@ -259,6 +259,39 @@ TEST(Simulator, AFailedFrameIsRetriedFromItsStartWithHalvedSteps) {
   EXPECT_THROW(validate(bad), weft::Error);
 }
 
+// A frame that fails in its first sub-step still returns a state at the frame's end: a
+// crumpled cloth falling freely in 4 sub-steps with one Newton iteration each (no retries)
+// is reported unconverged, and its centre of mass has fallen about as far as the
+// converged frame's (internal forces sum to zero), not the first sub-step's tenth of it.
+TEST(Simulator, AFailedFrameHandsOnAStateAtTheFramesEnd) {
+  ClothMesh mesh = make_grid_cloth(Vec3(-0.5, 1.0, -0.5), 1.0, 1.0, 10, 10, "xz", 0.2);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0, 0.03);
+  Positions x = mesh.rest;
+  for (int i = 0; i < x.size(); ++i) x[i] += noise(rng);
+  auto fall = [&](int max_iterations) {
+    SimulationSettings s = settings(1.0 / 30);
+    s.substeps = 4;
+    s.max_step_halvings = 0;
+    s.newton.max_iterations = max_iterations;
+    ClothSimulator sim(mesh, s);
+    return sim.step(x, x);
+  };
+  auto drop = [&](const Positions& y) {
+    double d = 0;
+    for (int i = 0; i < mesh.num_vertices(); ++i) d += mesh.mass[i] * (x[3 * i + 1] - y[3 * i + 1]);
+    return d / mesh.mass.sum();
+  };
+  const StepResult failed = fall(1), converged = fall(50);
+  ASSERT_NE(failed.status, StepStatus::converged) << "one iteration must not settle the crumpled cloth";
+  ASSERT_EQ(converged.status, StepStatus::converged);
+  EXPECT_EQ(failed.substeps, 4);
+  const double one_substep = 9.81 * std::pow(1.0 / 120, 2);  // implicit Euler from rest
+  EXPECT_NEAR(drop(converged.x), 10 * one_substep, 0.02 * one_substep);
+  EXPECT_NEAR(drop(failed.x), drop(converged.x), 0.1 * drop(converged.x));  // measured 5.5 % apart
+  EXPECT_TRUE(failed.x.allFinite());
+}
+
 // Adaptive sub-steps (SimulationSettings::max_body_motion): a body that moves 10 cm
 // through the cloth's neighbourhood in one frame is met in sub-steps of at most 1 cm; the
 // frame equals a simulator configured with that many sub-steps; a body that moves as far
