@@ -48,6 +48,15 @@ PoseParametrisation pose_parametrisation(const Character& character) {
   return p;
 }
 
+Eigen::Matrix3d root_rotation_world(const Character& character, const PoseParametrisation& param,
+                                    const PosedCharacter& posed) {
+  WEFT_CHECK(param.pivot_joint >= 0 && size_t(param.pivot_joint) < posed.joints.size(),
+             "root_rotation_world: pivot joint ", param.pivot_joint, " of a skeleton with ", posed.joints.size(),
+             " joints");
+  const Eigen::Matrix3d rest = forward_kinematics(character.skeleton, character.rest_dofs)[param.pivot_joint].linear();
+  return posed.joints[param.pivot_joint].linear() * rest.transpose();
+}
+
 CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig& config, uint64_t seed)
     : nn::Module("CaptureNetworks") {
   pose_outputs_ = static_cast<int64_t>(pose_parametrisation(character).free_dofs.size()) + 6;

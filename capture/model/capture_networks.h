@@ -44,6 +44,12 @@ struct PoseParametrisation {
 // origin (zero offset) and the only child of it.
 PoseParametrisation pose_parametrisation(const Character& character);
 
+// The world rotation a posed skeleton gives its root chain, in the convention of
+// CapturePrediction::rotation: the pivot joint's global rotation times the transpose of its
+// rest-pose rotation. The true root orientation that a predicted one is measured against.
+Eigen::Matrix3d root_rotation_world(const Character& character, const PoseParametrisation& param,
+                                    const PosedCharacter& posed);
+
 // Both networks as one module (checkpoints hold both: "pose_net.*", "deformation_net.*").
 class CaptureNetworks : public nn::Module {
  public:

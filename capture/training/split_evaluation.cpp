@@ -129,13 +129,12 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   MeasuredMean template_cloth_err;  // the template skinned by the predicted pose (PADefNet off)
   std::map<int, Eigen::Vector3d> gt_pivot;
   std::map<int, Eigen::Matrix3d> gt_rotation;
-  const Eigen::Matrix3d rest_rotation = forward_kinematics(ch.skeleton, ch.rest_dofs)[param.pivot_joint].linear();
   for (int f : frames) {
     WEFT_CHECK(f < motion.num_frames(), gt_dir.string(), "/pose.motion: no frame ", f);
     const PosedCharacter posed = pose_character(ch, motion.dofs.row(f).transpose());
     gt_keypoints[f] = posed.body25;
     gt_pivot[f] = posed.joints[param.pivot_joint].translation();
-    gt_rotation[f] = posed.joints[param.pivot_joint].linear() * rest_rotation.transpose();
+    gt_rotation[f] = root_rotation_world(ch, param, posed);
     gt_body[f] = read_ply((gt_dir / fmt::format("body_{:04d}.ply", f)).string()).V;
     if (ch.has_cloth()) {
       gt_cloth[f] = read_ply((gt_dir / fmt::format("cloth_{:04d}.ply", f)).string()).V;

@@ -14,6 +14,7 @@
 
 #include "capture/character/skeletool_io.h"
 #include "capture/deformation/losses.h"
+#include "capture/evaluation/frame_measures.h"
 #include "graph/atomic_file.h"
 #include "capture/io/portable_random.h"
 #include "files/text_reader.h"
@@ -128,8 +129,12 @@ class Trainer {
     if (fs::exists(gt)) {
       gt_motion_ = read_motion(gt.string(), int(character_.rest_dofs.size()));
       for (int f : frames)
-        if (f < gt_motion_.num_frames())
-          gt_keypoints_[f] = pose_character(character_, gt_motion_.dofs.row(f).transpose()).body25;
+        if (f < gt_motion_.num_frames()) {
+          const PosedCharacter posed = pose_character(character_, gt_motion_.dofs.row(f).transpose());
+          gt_keypoints_[f] = posed.body25;
+          gt_roots_[f] = {posed.joints[model_.parametrisation().pivot_joint].translation(),
+                          root_rotation_world(character_, model_.parametrisation(), posed)};
+        }
     }
     if (cfg_.oracle_pose) {
       WEFT_CHECK(fs::exists(gt), cfg_.file, ": oracle_pose poses the character by the ground truth, but ", gt.string(),
@@ -209,6 +214,11 @@ class Trainer {
   ArapTerms body_arap_, cloth_arap_;
   AttachmentTerms attachment_;
   std::map<int, Vertices> gt_keypoints_;
+  struct RootPose {
+    Eigen::Vector3d pivot;     // the pivot joint's position (character units)
+    Eigen::Matrix3d rotation;  // root_rotation_world
+  };
+  std::map<int, RootPose> gt_roots_;  // the truth's, per frame of gt/pose.motion
   Motion gt_motion_;  // gt/pose.motion (empty without one)
   // The ground truth's dofs of the batch's frames [B, D] (config oracle_pose).
   Tensor oracle_dofs(const Batch& batch) const {
@@ -529,6 +539,8 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   for (int i = 0; i < n; ++i) indices.push_back(int((int64_t(i) * split.size()) / n));
   double kp_sum = 0, joint_sum = 0, iou_sum = 0, pen_sum = 0;
   int kp_n = 0, joint_n = 0, iou_n = 0, pen_n = 0, cloth_n = 0;
+  MeasuredMean root_relative;
+  std::vector<double> rotation_errors;
   const double mpu = character_.metres_per_unit;
   for (int first = 0; first < n; first += 8) {
     std::vector<Sample> s(std::min(8, n - first));
@@ -543,10 +555,26 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
     for (int b = 0; b < batch.size(); ++b) {
       const int frame = batch.frames[b];
       const Vertices K = sample_vertices(p.keypoints, b);
-      if (const auto it = gt_keypoints_.find(frame); it != gt_keypoints_.end())
+      if (const auto it = gt_keypoints_.find(frame); it != gt_keypoints_.end()) {
+        const RootPose& truth = gt_roots_.at(frame);
+        // The predicted pivot is the predicted translation (the truth's under the oracle pose,
+        // whose prediction carries no translation of its own).
+        Eigen::Vector3d pivot = truth.pivot;
+        if (!cfg_.oracle_pose)
+          for (int a = 0; a < 3; ++a) pivot[a] = p.translation.data<float>()[3 * b + a];
         for (int m = 0; m < kBody25Count; ++m)
-          if (model_.keypoint_mask()[m] > 0 && it->second.row(m).allFinite())
+          if (model_.keypoint_mask()[m] > 0 && it->second.row(m).allFinite()) {
             joint_sum += (K.row(m) - it->second.row(m)).norm() * mpu * 1000, ++joint_n;
+            const Eigen::Vector3d rel = (K.row(m).transpose() - pivot) - (it->second.row(m).transpose() - truth.pivot);
+            root_relative.add(rel.norm() * mpu * 1000);
+          }
+        if (!cfg_.oracle_pose) {
+          Eigen::Matrix3d R;
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) R(r, c) = p.rotation.data<float>()[9 * b + 3 * r + c];
+          rotation_errors.push_back(rotation_error_deg(R, truth.rotation));
+        }
+      }
       const Vertices body = sample_vertices(p.body, b);
       Vertices cloth;
       if (p.cloth.defined()) cloth = sample_vertices(p.cloth, b);
@@ -569,6 +597,9 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   rep.samples = n;
   rep.keypoint_error_px = kp_n ? kp_sum / kp_n : 0;
   rep.joint_error_mm = joint_n ? joint_sum / joint_n : -1;
+  rep.joint_error_root_relative_mm = root_relative.value();
+  const RotationErrorSummary rotation = summarize_rotation_errors(rotation_errors);
+  rep.root_rotation_median_deg = rotation.median_deg, rep.root_rotation_above_45 = rotation.above_45;
   rep.silhouette_iou = iou_n ? iou_sum / iou_n : 0;
   rep.penetration_mean_mm = pen_n ? pen_sum / pen_n : 0;
   rep.penetrating_fraction = cloth_n ? double(pen_n) / cloth_n : 0;
@@ -592,10 +623,49 @@ void append_validation(const fs::path& path, const ValidationReport& r) {
   std::ofstream out(path, std::ios::app);
   if (fresh)
     out << "step,samples,keypoint_error_px,joint_error_mm,silhouette_iou,penetration_mean_mm,penetration_max_mm,"
-           "penetrating_fraction\n";
+           "penetrating_fraction,joint_error_root_relative_mm,root_rotation_median_deg,root_rotation_above_45\n";
   out << r.step << ',' << r.samples << ',' << r.keypoint_error_px << ',' << r.joint_error_mm << ','
       << r.silhouette_iou << ',' << r.penetration_mean_mm << ',' << r.penetration_max_mm << ','
-      << r.penetrating_fraction << '\n';
+      << r.penetrating_fraction << ',' << r.joint_error_root_relative_mm << ',' << r.root_rotation_median_deg << ','
+      << r.root_rotation_above_45 << '\n';
+}
+
+// RUN/validation.png, the learning curves: validation.csv's error columns against the
+// step, one panel each, the stages named from the config's step ranges.
+void plot_validation(const fs::path& csv, const std::vector<StageConfig>& stages) {
+  static const std::vector<std::string> plotted = {
+      "joint_error_root_relative_mm", "root_rotation_median_deg", "root_rotation_above_45", "joint_error_mm",
+      "keypoint_error_px",            "silhouette_iou",           "penetration_mean_mm"};
+  const auto cells_of = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  std::istringstream in(read_file_bytes(csv.string()));
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> columns = cells_of(line);
+  std::vector<LossRow> rows;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> cells = cells_of(line);
+    if (cells.empty()) continue;
+    LossRow row;
+    row.step = std::stoll(cells.at(0));
+    int64_t end = 0;
+    for (const StageConfig& s : stages) {
+      end += s.steps;
+      if (row.step <= end) {
+        row.stage = stage_name(s.kind);
+        break;
+      }
+    }
+    for (size_t c = 1; c < std::min(cells.size(), columns.size()); ++c)
+      if (std::find(plotted.begin(), plotted.end(), columns[c]) != plotted.end())
+        row.terms[columns[c]] = std::strtod(cells[c].c_str(), nullptr);  // "nan": not measured
+    rows.push_back(std::move(row));
+  }
+  if (!rows.empty()) plot_losses(rows, (csv.parent_path() / "validation.png").string(), "weft train: validation");
 }
 
 // The mean time per step of each part (the parts add up to the step), logged and kept in
@@ -637,9 +707,11 @@ void append_parameter_checksum(const fs::path& path, int64_t step, const Capture
 }
 
 void log_validation(const ValidationReport& r) {
-  spdlog::info("validation at step {}: {} samples, keypoints {:.2f} px, joints {:.1f} mm, silhouette IoU {:.4f}, "
+  spdlog::info("validation at step {}: {} samples, keypoints {:.2f} px, joints {:.1f} mm ({:.1f} mm root-relative), "
+               "root rotation median {:.1f}° ({:.1f} % above 45°), silhouette IoU {:.4f}, "
                "penetration mean {:.2f} mm max {:.2f} mm ({:.2f} % of cloth vertices)",
-               r.step, r.samples, r.keypoint_error_px, r.joint_error_mm, r.silhouette_iou, r.penetration_mean_mm,
+               r.step, r.samples, r.keypoint_error_px, r.joint_error_mm, r.joint_error_root_relative_mm,
+               r.root_rotation_median_deg, 100 * r.root_rotation_above_45, r.silhouette_iou, r.penetration_mean_mm,
                r.penetration_max_mm, 100 * r.penetrating_fraction);
 }
 
@@ -778,6 +850,7 @@ void Trainer::book_step(int64_t step, const StageConfig& s, int64_t stage_start,
       ValidationReport v = validate(*val_, cfg_.validation_samples);
       v.step = step;
       append_validation(run / "validation.csv", v);
+      plot_validation(run / "validation.csv", cfg_.stages);
       log_validation(v);
       summary.last_validation = v;
     }

@@ -18,6 +18,7 @@
 // alone writes the run folder.
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -51,6 +52,12 @@ struct ValidationReport {
   int samples = 0;
   double keypoint_error_px = 0;   // mean 2D keypoint error over all views (full-image px)
   double joint_error_mm = -1;     // mean 3D BODY_25 error against gt/pose.motion (−1: no ground truth)
+  // The same with both pivot joints at the origin (the articulated pose alone), and the
+  // root orientation's geodesic error over the samples: median and fraction above 45°
+  // (front/back confusion). NaN: not measured (no ground truth; the rotation under oracle_pose).
+  double joint_error_root_relative_mm = std::numeric_limits<double>::quiet_NaN();
+  double root_rotation_median_deg = std::numeric_limits<double>::quiet_NaN();
+  double root_rotation_above_45 = std::numeric_limits<double>::quiet_NaN();
   double silhouette_iou = 0;      // predicted body+cloth vs mask, mean over samples × views
   double penetration_mean_mm = 0; // mean depth of cloth vertices inside the body (over those inside)
   double penetration_max_mm = 0;

@@ -22,6 +22,7 @@
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 #include "capture/character/skeletool_io.h"
+#include "capture/evaluation/frame_measures.h"
 #include "capture/training/split_evaluation.h"
 #include "capture/io/openpose.h"
 #include "capture/studio/synthetic_studio.h"
@@ -160,8 +161,24 @@ TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
   }
   EXPECT_EQ(logged, f.simulation_windows);
   EXPECT_GT(with_rays, 0);
-  for (const char* file : {"losses.csv", "losses.png", "validation.csv", "config.yaml", "model.safetensors"})
+  for (const char* file : {"losses.csv", "losses.png", "validation.csv", "validation.png", "config.yaml",
+                           "model.safetensors"})
     EXPECT_TRUE(fs::exists(f.reference / file)) << file;
+  // The learning curve's figures: the articulated pose's error and the root orientation's.
+  std::istringstream validation(slurp(f.reference / "validation.csv"));
+  std::string header, row, last;
+  std::getline(validation, header);
+  EXPECT_EQ(header,
+            "step,samples,keypoint_error_px,joint_error_mm,silhouette_iou,penetration_mean_mm,penetration_max_mm,"
+            "penetrating_fraction,joint_error_root_relative_mm,root_rotation_median_deg,root_rotation_above_45");
+  while (std::getline(validation, row)) last = row;
+  std::vector<double> c;
+  std::stringstream cells(last);
+  for (std::string v; std::getline(cells, v, ',');) c.push_back(std::stod(v));
+  ASSERT_EQ(c.size(), 11u) << last;
+  EXPECT_GT(c[8], 0.0) << last;  // an untrained PoseNet's articulated pose is off
+  EXPECT_TRUE(c[9] >= 0 && c[9] <= 180) << last;
+  EXPECT_TRUE(c[10] >= 0 && c[10] <= 1) << last;
   EXPECT_GE(f.validation_iou, 0.0);
   EXPECT_GT(f.validation_samples, 0);
 }
@@ -170,6 +187,31 @@ TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
 // the pose stage, then in the warm start, then in the physics stage): every step's loss is
 // bit-identical to the uninterrupted run's (losses.csv prints 9 significant digits of each
 // float32 loss; the files are compared whole).
+// The true root orientation that validation and the split evaluation measure PoseNet's
+// against is the rotation that places the root chain as a prediction does: with any root
+// transform (every root-chain dof moved) and the rest of the skeleton at rest, each body
+// vertex is R (x0 − p0) + pivot, x0 its rest position and p0 the rest pivot.
+TEST(Training, RootRotationWorldPlacesTheBodyAsAPredictionDoes) {
+  const DatasetInfo info = read_dataset_info(tiny_data().string());
+  const Character ch = load_character(info.character);
+  const PoseParametrisation param = pose_parametrisation(ch);
+  ASSERT_FALSE(param.root_dofs.empty());
+  const PosedCharacter rest = pose_character(ch, ch.rest_dofs);
+  EXPECT_LT((root_rotation_world(ch, param, rest) - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  Eigen::VectorXd dofs = ch.rest_dofs;
+  const double moves[] = {0.3, -0.2, 0.15, 2.5, -0.7, 1.1};
+  for (size_t i = 0; i < param.root_dofs.size(); ++i) dofs[param.root_dofs[i]] += moves[i % 6];
+  const PosedCharacter posed = pose_character(ch, dofs);
+  const Eigen::Matrix3d R = root_rotation_world(ch, param, posed);
+  EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+  EXPECT_NEAR(R.determinant(), 1.0, 1e-9);
+  EXPECT_GT(rotation_error_deg(R, Eigen::Matrix3d::Identity()), 10.0);  // the moves turned it
+  const Eigen::Vector3d pivot = posed.joints[param.pivot_joint].translation();
+  const Vertices expected = ((rest.body.rowwise() - param.pivot.transpose()) * R.transpose()).rowwise() +
+                            pivot.transpose();
+  EXPECT_LT((posed.body - expected).cwiseAbs().maxCoeff(), 1e-6 / ch.metres_per_unit);
+}
+
 TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
   REQUIRE_HUMAN();
   ASSERT_TRUE(fs::exists(weft_binary())) << weft_binary();
@@ -222,10 +264,12 @@ TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
   std::vector<std::string> c;
   std::stringstream ss(row);
   for (std::string v; std::getline(ss, v, ',');) c.push_back(v);
-  ASSERT_GE(c.size(), 4u) << row;
+  ASSERT_EQ(c.size(), 11u) << row;
   // Only PADefNet's graph moves the keypoints off the ground truth's (by millimetres after
   // 5 steps; an untrained PoseNet is hundreds of millimetres off).
   EXPECT_LT(std::stod(c[3]), 20.0) << "joint error (mm) under the oracle pose: " << row;
+  EXPECT_LT(std::stod(c[8]), 20.0) << "root-relative joint error (mm) under the oracle pose: " << row;
+  EXPECT_EQ(c[9], "nan") << "the oracle's root rotation is the truth's: not measured: " << row;
   // Its evaluation poses by the ground truth too: no root rotation to measure.
   const nlohmann::json ev = nlohmann::json::parse(
       evaluate_split(config.string(), tiny_data().string(), (dir / "run" / "model.safetensors").string(), "val")
