@@ -179,39 +179,20 @@ void BodyMesh::compute_normals() {
     }
 }
 
-template <class Accept>
-ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const {
-  ClosestPoint best;
-  if (nodes_.empty()) return best;
-  double best_d2 = std::isfinite(max_distance) ? max_distance * max_distance
-                                               : std::numeric_limits<double>::infinity();
-  TriangleFeature best_region = TriangleFeature::face;
+template <class Bound, class Visit>
+void BodyMesh::traverse(const Eigen::Vector3d& x, const Bound& bound2, const Visit& visit) const {
+  if (nodes_.empty()) return;
   int stack[128];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
     const Node& n = nodes_[stack[--top]];
-    if (box_distance2(x, n.lo, n.hi) >= best_d2) continue;
+    if (box_distance2(x, n.lo, n.hi) >= bound2()) continue;
     if (n.left < 0) {
-      for (int k = n.begin; k < n.end; ++k) {
-        if (!accept(active_[k])) continue;
-        const auto& t = faces_[active_[k]];
-        TriangleFeature region;
-        Eigen::Vector3d barycentric;
-        const Eigen::Vector3d p = closest_point_on_triangle(x, vertices_.row(t[0]).transpose(),
-                                                            vertices_.row(t[1]).transpose(),
-                                                            vertices_.row(t[2]).transpose(), barycentric, &region);
-        const double d2 = (x - p).squaredNorm();
-        if (d2 < best_d2) {
-          best_d2 = d2;
-          best.point = p;
-          best.face = active_[k];
-          best_region = region;
-        }
-      }
+      for (int k = n.begin; k < n.end; ++k) visit(active_[k]);
       continue;
     }
-    // Visit the nearer child first (pushed last).
+    // Visit the nearer child first (pushed last), so that a shrinking bound prunes more.
     const double dl = box_distance2(x, nodes_[n.left].lo, nodes_[n.left].hi);
     const double dr = box_distance2(x, nodes_[n.right].lo, nodes_[n.right].hi);
     if (dl < dr) {
@@ -222,58 +203,76 @@ ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_
       stack[top++] = n.right;
     }
   }
-  if (best.face < 0) return best;
-  const auto& t = faces_[best.face];
-  switch (best_region) {
-    case TriangleFeature::face: best.normal = face_normals_[best.face]; break;
-    case TriangleFeature::edge01: best.normal = edge_normals_[best.face][0]; break;
-    case TriangleFeature::edge12: best.normal = edge_normals_[best.face][1]; break;
-    case TriangleFeature::edge20: best.normal = edge_normals_[best.face][2]; break;
+}
+
+BodyMesh::FaceNear BodyMesh::near_face(const Eigen::Vector3d& x, int f) const {
+  const auto& t = faces_[f];
+  FaceNear near;
+  near.face = f;
+  Eigen::Vector3d barycentric;
+  near.point = closest_point_on_triangle(x, vertices_.row(t[0]).transpose(), vertices_.row(t[1]).transpose(),
+                                         vertices_.row(t[2]).transpose(), barycentric, &near.feature);
+  near.distance2 = (x - near.point).squaredNorm();
+  return near;
+}
+
+ClosestPoint BodyMesh::signed_closest_point(const Eigen::Vector3d& x, const FaceNear& near) const {
+  ClosestPoint best;
+  if (near.face < 0) return best;
+  best.point = near.point;
+  best.face = near.face;
+  const auto& t = faces_[near.face];
+  switch (near.feature) {
+    case TriangleFeature::face: best.normal = face_normals_[near.face]; break;
+    case TriangleFeature::edge01: best.normal = edge_normals_[near.face][0]; break;
+    case TriangleFeature::edge12: best.normal = edge_normals_[near.face][1]; break;
+    case TriangleFeature::edge20: best.normal = edge_normals_[near.face][2]; break;
     case TriangleFeature::vertex0: best.normal = vertex_normals_[t[0]]; break;
     case TriangleFeature::vertex1: best.normal = vertex_normals_[t[1]]; break;
     case TriangleFeature::vertex2: best.normal = vertex_normals_[t[2]]; break;
   }
-  best.face_interior = best_region == TriangleFeature::face;
-  const int edge = best_region == TriangleFeature::edge01   ? 0
-                   : best_region == TriangleFeature::edge12 ? 1
-                   : best_region == TriangleFeature::edge20 ? 2
-                                                   : -1;
+  best.face_interior = near.feature == TriangleFeature::face;
+  const int edge = near.feature == TriangleFeature::edge01   ? 0
+                   : near.feature == TriangleFeature::edge12 ? 1
+                   : near.feature == TriangleFeature::edge20 ? 2
+                                                             : -1;
   if (edge >= 0) {
     best.on_edge = true;
-    best.edge_direction =
-        (vertices_.row(t[(edge + 1) % 3]) - vertices_.row(t[edge])).transpose().normalized();
+    best.edge_direction = (vertices_.row(t[(edge + 1) % 3]) - vertices_.row(t[edge])).transpose().normalized();
   }
-  const double unsigned_distance = std::sqrt(best_d2);
+  const double unsigned_distance = std::sqrt(near.distance2);
   best.distance = (x - best.point).dot(best.normal) < 0 ? -unsigned_distance : unsigned_distance;
   return best;
+}
+
+template <class Accept>
+ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const {
+  FaceNear best;
+  best.distance2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::infinity();
+  traverse(x, [&] { return best.distance2; }, [&](int f) {
+    if (!accept(f)) return;
+    const FaceNear near = near_face(x, f);
+    if (near.distance2 < best.distance2) best = near;
+  });
+  return signed_closest_point(x, best);
 }
 
 ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance) const {
   return closest_point_where(x, max_distance, [](int) { return true; });
 }
 
-void BodyMesh::faces_within(const Eigen::Vector3d& x, double max_distance, std::vector<int>& out) const {
-  if (nodes_.empty()) return;
-  const double max_d2 = max_distance * max_distance;
-  int stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& n = nodes_[stack[--top]];
-    if (box_distance2(x, n.lo, n.hi) >= max_d2) continue;
-    if (n.left >= 0) {
-      stack[top++] = n.left;
-      stack[top++] = n.right;
-      continue;
-    }
-    for (int k = n.begin; k < n.end; ++k) {
-      const auto& t = faces_[active_[k]];
-      Eigen::Vector3d barycentric;
-      const Eigen::Vector3d p = closest_point_on_triangle(x, vertices_.row(t[0]).transpose(), vertices_.row(t[1]).transpose(),
-                                                          vertices_.row(t[2]).transpose(), barycentric);
-      if ((x - p).squaredNorm() < max_d2) out.push_back(active_[k]);
-    }
-  }
+ClosestPoint BodyMesh::closest_point_and_faces_within(const Eigen::Vector3d& x, double band,
+                                                      std::vector<FaceNear>& faces) const {
+  faces.clear();
+  const double band2 = band * band;
+  FaceNear best;
+  best.distance2 = std::numeric_limits<double>::infinity();
+  traverse(x, [&] { return std::max(band2, best.distance2); }, [&](int f) {
+    const FaceNear near = near_face(x, f);
+    if (near.distance2 < band2) faces.push_back(near);
+    if (near.distance2 < best.distance2) best = near;
+  });
+  return signed_closest_point(x, best);
 }
 
 ClosestPoint BodyMesh::closest_point_facing_away(const Eigen::Vector3d& x, double max_distance,

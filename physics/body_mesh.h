@@ -8,6 +8,8 @@
 #include <array>
 #include <vector>
 
+#include "geometry/closest_point.h"
+
 namespace weft::physics {
 
 struct ClosestPoint {
@@ -52,8 +54,18 @@ class BodyMesh {
                                          const Eigen::Vector3d& facing, double max_cos) const;
   // Unit normal of face f.
   const Eigen::Vector3d& face_normal(int f) const { return face_normals_[f]; }
-  // Appends to `faces` every active face closer to x than max_distance (m), in no order.
-  void faces_within(const Eigen::Vector3d& x, double max_distance, std::vector<int>& faces) const;
+  // One active face near a point: the face's closest point to it, the feature of the face
+  // that point lies on, and the squared distance (m²).
+  struct FaceNear {
+    int face = -1;
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();
+    TriangleFeature feature = TriangleFeature::face;
+    double distance2 = 0;
+  };
+  // closest_point(x) and, in `faces` (cleared first, in no order), every active face closer
+  // to x than `band` (m) with its own closest point: one traversal of the tree.
+  ClosestPoint closest_point_and_faces_within(const Eigen::Vector3d& x, double band,
+                                              std::vector<FaceNear>& faces) const;
   // The mesh as a cell complex of its active faces, for sums over its features:
   // the ids of face f's edges (k, k+1), an edge's two vertices, and the inclusion–exclusion
   // weights that make Σ_faces − … count each feature's neighbourhood once: an edge shared
@@ -76,6 +88,14 @@ class BodyMesh {
   // The closest point over the active faces `accept(face)` admits.
   template <class Accept>
   ClosestPoint closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const;
+  // The one tree walk of every query: visit(face) for each active face in a leaf whose box
+  // is closer to x than √bound2(), nearer children first; bound2() may shrink as faces are
+  // visited (a closest-point search) or stay fixed (all faces within a band).
+  template <class Bound, class Visit>
+  void traverse(const Eigen::Vector3d& x, const Bound& bound2, const Visit& visit) const;
+  FaceNear near_face(const Eigen::Vector3d& x, int face) const;
+  // The signed closest point of the nearest face found (face −1: none).
+  ClosestPoint signed_closest_point(const Eigen::Vector3d& x, const FaceNear& nearest) const;
   void refit(int node);
   void compute_normals();
 

@@ -120,23 +120,22 @@ void CollisionEnergy::accumulate_penalty(double w, const DistanceSample& s, doub
   h += w * (c * gap * (s.gradient * s.gradient.transpose()) - de * s.hessian);
 }
 
-double CollisionEnergy::add_feature_sum(int i, const Eigen::Vector3d& x, const BodyMesh& body, Eigen::VectorXd* g,
+double CollisionEnergy::add_feature_sum(int i, const Eigen::Vector3d& x, const BodyMesh& body,
+                                        const std::vector<BodyMesh::FaceNear>& faces, Eigen::VectorXd* g,
                                         SparseHessian* H) const {
-  thread_local std::vector<int> faces, edges, vertices;
-  faces.clear();
+  thread_local std::vector<int> edges, vertices;
   edges.clear();
   vertices.clear();
-  body.faces_within(x, thickness_, faces);
   double e = 0;
   Eigen::Vector3d gi = Eigen::Vector3d::Zero();
   Eigen::Matrix3d hi = Eigen::Matrix3d::Zero();
   const Eigen::MatrixX3d& V = body.vertices();
   auto vertex = [&](int v) -> Eigen::Vector3d { return V.row(v).transpose(); };
-  for (int f : faces) {
+  for (const BodyMesh::FaceNear& near : faces) {
+    const int f = near.face;
     const auto& t = body.faces()[f];
-    Eigen::Vector3d barycentric;
-    TriangleFeature feature;
-    const Eigen::Vector3d p = closest_point_on_triangle(x, vertex(t[0]), vertex(t[1]), vertex(t[2]), barycentric, &feature);
+    const TriangleFeature feature = near.feature;
+    const Eigen::Vector3d& p = near.point;
     Eigen::Vector3d along;
     const Eigen::Vector3d* edge = nullptr;
     if (feature == TriangleFeature::edge01 || feature == TriangleFeature::edge12 || feature == TriangleFeature::edge20) {
@@ -195,12 +194,15 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
     for (size_t b = 0; b < bodies_.size(); ++b) {
       CacheEntry& c = cache_[b][i];
       if (c.d_ref > thickness_ && (xi - c.x_ref).norm() < c.d_ref - thickness_) continue;
-      const ClosestPoint cp = bodies_[b]->closest_point(xi);
+      // With smooth creases one walk of the tree also gathers the faces within the band.
+      thread_local std::vector<BodyMesh::FaceNear> near;
+      const ClosestPoint cp = smooth_creases_ ? bodies_[b]->closest_point_and_faces_within(xi, thickness_, near)
+                                              : bodies_[b]->closest_point(xi);
       const DistanceSample s = signed_distance(cp, xi);
       c.x_ref = xi;
       c.d_ref = s.distance;
       if (smooth_creases_ && s.distance > 0 && s.distance < thickness_) {
-        energy += add_feature_sum(i, xi, *bodies_[b], g, H);
+        energy += add_feature_sum(i, xi, *bodies_[b], near, g, H);
         continue;
       }
       energy += add_penalty(i, s, g, H);

@@ -100,9 +100,11 @@ class CollisionEnergy : public Energy {
   // w times the penalty of sample s, added to a vertex's energy, gradient and Hessian block.
   void accumulate_penalty(double w, const DistanceSample& s, double& e, Eigen::Vector3d& g,
                           Eigen::Matrix3d& h) const;
-  // Vertex i's smooth-crease penalty against body (see set_smooth_creases); returns it.
-  double add_feature_sum(int i, const Eigen::Vector3d& x, const BodyMesh& body, Eigen::VectorXd* g,
-                         SparseHessian* H) const;
+  // Vertex i's smooth-crease penalty against body (see set_smooth_creases) from the faces
+  // within the band and their closest points (BodyMesh::closest_point_and_faces_within);
+  // returns it.
+  double add_feature_sum(int i, const Eigen::Vector3d& x, const BodyMesh& body,
+                         const std::vector<BodyMesh::FaceNear>& faces, Eigen::VectorXd* g, SparseHessian* H) const;
 
   int n_;
   double thickness_, k_;

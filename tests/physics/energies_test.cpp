@@ -6,7 +6,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <functional>
+#include <random>
 #include <set>
 #include <string>
 
@@ -409,6 +411,43 @@ TEST(Energies, BodyMeshSignedDistance) {
     }
     EXPECT_NEAR(std::abs(sphere.closest_point(p).distance), best, 1e-12);
   }
+}
+
+// The smooth creases' query (one walk of the tree) gives closest_point's answer and exactly
+// the faces within the band, each with its own closest point, as brute force over all faces.
+TEST(Energies, BodyMeshClosestPointAndFacesWithinTheBandMatchBruteForce) {
+  const BodyMesh sphere = testing::uv_sphere(Vec3(0, 1, 0), 0.3);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<BodyMesh::FaceNear> near;
+  int with_faces = 0;
+  for (int k = 0; k < 300; ++k) {
+    Vec3 dir(u(rng), u(rng), u(rng));
+    dir.normalize();
+    const double band = 0.004 + 0.02 * (k % 3);
+    const Vec3 p = Vec3(0, 1, 0) + dir * (0.3 + 0.03 * u(rng));  // within a few cm of the surface
+    const ClosestPoint a = sphere.closest_point(p), b = sphere.closest_point_and_faces_within(p, band, near);
+    EXPECT_EQ(a.face, b.face);
+    EXPECT_EQ(a.distance, b.distance);
+    std::vector<int> expected, got;
+    for (size_t f = 0; f < sphere.faces().size(); ++f) {
+      Eigen::Vector3d w;
+      const auto& t = sphere.faces()[f];
+      const Vec3 q = weft::closest_point_on_triangle(p, sphere.vertices().row(t[0]).transpose(),
+                                                     sphere.vertices().row(t[1]).transpose(),
+                                                     sphere.vertices().row(t[2]).transpose(), w);
+      if ((p - q).norm() < band) expected.push_back(int(f));
+    }
+    for (const BodyMesh::FaceNear& n : near) {
+      got.push_back(n.face);
+      EXPECT_NEAR((p - n.point).squaredNorm(), n.distance2, 1e-15);
+      EXPECT_LT(n.distance2, band * band);
+    }
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, expected) << "point " << k;
+    with_faces += !expected.empty();
+  }
+  EXPECT_GT(with_faces, 100);  // the points test the band, not only its absence
 }
 
 TEST(Energies, RigidMotionsGiveZeroMembraneAndBendingForce) {
