@@ -30,6 +30,18 @@ Tensor landmark_loss(const Tensor& projected, const Tensor& detections, const Te
   return ops::scale(ops::sum(ops::mul(sq, confidence)), 1.0 / static_cast<double>(projected.size(0)));
 }
 
+Tensor keypoint_3d_loss(const Tensor& points, const Tensor& targets, const Tensor& weights) {
+  if (points.shape() != targets.shape() || points.dim() != 3 || points.size(2) != 3)
+    fail("keypoint_3d_loss: points ", shape_str(points.shape()), " and targets ", shape_str(targets.shape()),
+         " must both be [B, M, 3]");
+  if (weights.shape() != Shape{points.size(0), points.size(1)})
+    fail("keypoint_3d_loss: weights must be [B, M] = ", shape_str({points.size(0), points.size(1)}), ", got ",
+         shape_str(weights.shape()));
+  const Tensor d = ops::sub(points, targets);
+  const Tensor sq = ops::sum(ops::mul(d, d), {2});  // [B,M]
+  return ops::scale(ops::sum(ops::mul(sq, weights)), 1.0 / static_cast<double>(points.size(0)));
+}
+
 std::vector<int> boundary_vertices(const Camera& camera, const Vertices& V, const Faces& F,
                                    double max_cos) {
   const Vertices N = vertex_normals(V, F);

@@ -21,6 +21,10 @@ ops::PinholeCamera pinhole(const Camera& camera);
 // [B,M,2], confidences [B,M] (0 for undetected keypoints) → scalar (pixels²).
 Tensor landmark_loss(const Tensor& projected, const Tensor& detections, const Tensor& confidence);
 
+// L_3d = Σ_b Σ_m w_bm ‖p_bm − q_bm‖² / B: points [B,M,3], their targets [B,M,3] (any finite
+// value where w is 0), weights [B,M] → scalar (units²).
+Tensor keypoint_3d_loss(const Tensor& points, const Tensor& targets, const Tensor& weights);
+
 // Vertices of a mesh on its silhouette as seen by `camera`: the normal is nearly
 // perpendicular to the viewing ray (|cos| ≤ max_cos) and the vertex is visible (no
 // closer surface point within a pixel neighbourhood of a point z-buffer).

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "graph/error.h"
 #include "ops/ops.h"
@@ -107,6 +108,35 @@ RootTranslationTerms root_translation_terms(const std::vector<std::vector<Keypoi
     }
   }
   return terms;
+}
+
+Body25 triangulate_keypoints(const std::vector<KeypointView>& views, const std::vector<double>& keypoint_mask,
+                             double min_confidence) {
+  constexpr int M = kBody25Count;
+  if (keypoint_mask.size() != static_cast<size_t>(M))
+    fail("triangulate_keypoints: keypoint_mask has ", keypoint_mask.size(), " entries, expected ", M);
+  Body25 out;
+  out.setConstant(std::numeric_limits<double>::quiet_NaN());
+  for (int m = 0; m < M; ++m) {
+    if (!(keypoint_mask[m] > 0)) continue;
+    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    int seen = 0;
+    for (const KeypointView& view : views) {
+      const double conf = view.detections(m, 2);
+      if (!std::isfinite(conf) || conf < min_confidence) continue;
+      const Eigen::Vector3d d = pixel_ray(view.camera, view.detections(m, 0), view.detections(m, 1));
+      const Eigen::Matrix3d A = conf * keypoint_mask[m] * (Eigen::Matrix3d::Identity() - d * d.transpose());
+      S += A;
+      b += A * view.camera.center();
+      ++seen;
+    }
+    if (seen < 2) continue;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(S);
+    if (!(eig.eigenvalues()[0] > 1e-4 * eig.eigenvalues()[2])) continue;
+    out.row(m) = S.ldlt().solve(b).transpose();
+  }
+  return out;
 }
 
 Tensor solve_root_translation(const RootTranslationTerms& terms, const Tensor& points) {

@@ -47,6 +47,17 @@ struct KeypointView {
 RootTranslationTerms root_translation_terms(const std::vector<std::vector<KeypointView>>& views,
                                             const std::vector<double>& keypoint_mask, DType dtype);
 
+// The BODY_25 keypoints of one frame triangulated from its views' detections: for each
+// keypoint the point nearest to the detections' rays in the least-squares sense,
+//   q_m = argmin Σ_c w_cm ‖(I − d_cm d_cmᵀ)(q − o_c)‖²,  w_cm = confidence × keypoint mask,
+// over the views where it is detected with confidence ≥ min_confidence. Rows are NaN for
+// an unmapped keypoint, one seen in fewer than two views, or rays too close to parallel
+// (the smallest eigenvalue of Σ w (I − d dᵀ) below 1e-4 of the largest). World
+// coordinates, the cameras' units. Multi-view supervision of the pose in 3D, no ground
+// truth needed (DeepCap's studio has the same calibrated views).
+Body25 triangulate_keypoints(const std::vector<KeypointView>& views, const std::vector<double>& keypoint_mask,
+                             double min_confidence = 0.1);
+
 // t [B,3] = offset − Σ_m C_m P_m for points [B,M,3] of the terms' dtype; differentiable in P.
 Tensor solve_root_translation(const RootTranslationTerms& terms, const Tensor& points);
 

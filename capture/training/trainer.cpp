@@ -120,6 +120,9 @@ class Trainer {
       frames.insert(frames.end(), val_->frames().begin(), val_->frames().end());
     }
     supervision_ = std::make_unique<MultiviewSupervision>(info_, frames, cfg_.silhouette_size);
+    bool with_3d = false;
+    for (const StageConfig& s : cfg_.stages) with_3d |= s.steps > 0 && s.weights.keypoints_3d > 0;
+    if (with_3d) triangulate_frames(frames);
     body_arap_ = arap_terms(character_.body.graph, DType::F32);
     if (character_.has_cloth()) {
       cloth_arap_ = arap_terms(character_.cloth->graph, DType::F32);
@@ -214,6 +217,44 @@ class Trainer {
   ArapTerms body_arap_, cloth_arap_;
   AttachmentTerms attachment_;
   std::map<int, Vertices> gt_keypoints_;
+  // L_3d's targets: per frame, the keypoints triangulated from every view's detections
+  // (character units, NaN rows: not triangulated).
+  std::map<int, Body25> triangulated_;
+  void triangulate_frames(const std::vector<int>& frames) {
+    int points = 0, possible = 0;
+    for (int f : frames) {
+      std::vector<KeypointView> views;
+      for (int v = 0; v < supervision_->views(); ++v)
+        views.push_back({supervision_->camera(f, v), supervision_->detections(f, v)});
+      const Body25 q = triangulate_keypoints(views, model_.keypoint_mask());
+      triangulated_[f] = q;
+      for (int m = 0; m < kBody25Count; ++m) {
+        possible += model_.keypoint_mask()[m] > 0;
+        points += q.row(m).allFinite();
+      }
+    }
+    spdlog::info("keypoints_3d: {} of {} mapped keypoints triangulated over {} frames ({} views each)", points,
+                 possible, frames.size(), supervision_->views());
+  }
+  // L_3d of a batch: the mean squared distance (m²) of its keypoints to the triangulated ones.
+  Tensor keypoint_3d_term(const CapturePrediction& p, const Batch& batch) const {
+    const int64_t B = batch.size();
+    std::vector<double> targets(B * kBody25Count * 3, 0.0), weights(B * kBody25Count, 0.0);
+    double total = 0;
+    for (int64_t b = 0; b < B; ++b) {
+      const Body25& q = triangulated_.at(batch.frames[b]);
+      for (int m = 0; m < kBody25Count; ++m) {
+        if (!q.row(m).allFinite()) continue;
+        weights[b * kBody25Count + m] = 1, total += 1;
+        for (int a = 0; a < 3; ++a) targets[(b * kBody25Count + m) * 3 + a] = q(m, a);
+      }
+    }
+    const DType dt = p.keypoints.dtype();
+    const double mpu = character_.metres_per_unit;
+    const Tensor loss = keypoint_3d_loss(p.keypoints, Tensor::from_data({B, kBody25Count, 3}, targets, dt),
+                                         Tensor::from_data({B, kBody25Count}, weights, dt));
+    return ops::scale(loss, mpu * mpu * double(B) / std::max(total, 1.0));
+  }
   struct RootPose {
     Eigen::Vector3d pivot;     // the pivot joint's position (character units)
     Eigen::Matrix3d rotation;  // root_rotation_world
@@ -282,6 +323,7 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
   const double m2 = character_.metres_per_unit * character_.metres_per_unit;  // units² → m²
   if (w.landmarks > 0 || stats)
     t["landmarks"] = multiview_landmark_loss(p.keypoints, batch.frames, *supervision_, model_.keypoint_mask(), stats);
+  if (w.keypoints_3d > 0) t["keypoints_3d"] = keypoint_3d_term(p, batch);
   if (w.silhouette > 0) {
     const Tensor all = p.cloth.defined() ? ops::concat({p.body, p.cloth}, 1) : p.body;
     t["silhouette"] = multiview_silhouette_loss(all, faces_, batch.frames, *supervision_);

@@ -30,6 +30,8 @@ int TrainingConfig::total_steps() const {
 const std::vector<LossTerm>& loss_terms() {
   static const std::vector<LossTerm> table = {
       {"landmarks", &LossWeights::landmarks, "L_lm: confidence-weighted squared pixel error of the projected keypoints"},
+      {"keypoints_3d", &LossWeights::keypoints_3d,
+       "L_3d: squared distance (m²) of the keypoints to those triangulated from the frame's detections in every view"},
       {"silhouette", &LossWeights::silhouette, "L_sil: squared distance-transform value at the boundary vertices"},
       {"arap", &LossWeights::arap, "L_arap: as-rigid-as-possible energy of the embedded graphs"},
       {"attachment", &LossWeights::attachment, "L_att: squared distance of the garment's anchors to their body triangles"},
@@ -67,7 +69,8 @@ void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
     y.fail_at(n["cloth_arap"], where + "cloth_arap", "needs arap > 0 (arap weighs the body's graph; cloth_arap the garment's)");
   if (s.kind == StageKind::pose && (s.weights.silhouette > 0 || s.weights.arap > 0 || s.weights.cloth_arap > 0 ||
                                     s.weights.attachment > 0 || s.weights.simulation > 0))
-    y.fail_at(n, where + "landmarks", "the pose stage trains PoseNet on landmarks only: other weights must be 0");
+    y.fail_at(n, where + "landmarks",
+              "the pose stage trains PoseNet on landmarks and keypoints_3d only: other weights must be 0");
   if (s.kind == StageKind::warmup && s.weights.simulation > 0)
     y.fail_at(n["simulation"], where + "simulation", "the warm start has no simulation loss (that is the physics stage)");
 }

@@ -16,6 +16,7 @@ namespace weft::capture {
 // The loss weights β of one stage (0: the term is not computed).
 struct LossWeights {
   double landmarks = 0;   // L_lm, over all views of the frame
+  double keypoints_3d = 0;  // L_3d: the keypoints against those triangulated from every view's detections
   double silhouette = 0;  // L_sil, over all views of the frame
   double arap = 0;        // L_arap of the body's embedded graph
   double cloth_arap = -1; // L_arap of the garment's graph (< 0: the same as `arap`)
@@ -36,7 +37,7 @@ struct LossTerm {
 };
 const std::vector<LossTerm>& loss_terms();
 
-// The stages, in the order they run: (a) PoseNet on L_lm; (b) PADefNet's warm start with
+// The stages, in the order they run: (a) PoseNet on L_lm (and L_3d); (b) PADefNet's warm start with
 // PoseNet frozen; (c) the physics-aware stage (PoseNet frozen).
 enum class StageKind { pose, warmup, physics };
 const char* stage_name(StageKind kind);  // "pose", "warmup", "physics"

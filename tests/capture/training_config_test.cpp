@@ -56,7 +56,14 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, lr: -1}\n", "c.yaml"); },
                {"c.yaml", "stages.pose.lr"});
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, silhouette: 1}\n", "c.yaml"); },
-               {"c.yaml", "landmarks only"});
+               {"c.yaml", "landmarks and keypoints_3d only"});
+  // L_3d is a pose-stage term: read as one of its weights.
+  EXPECT_EQ(parse_training_config("stages:\n  pose: {steps: 4, landmarks: 1, keypoints_3d: 250}\n", "c.yaml")
+                .stages[0]
+                .weights.keypoints_3d,
+            250.0);
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, keypoints_3d: -1}\n", "c.yaml"); },
+               {"c.yaml", "stages.pose.keypoints_3d"});
   expect_error([] { parse_training_config("stages:\n  poses: {steps: 4}\n", "c.yaml"); }, {"c.yaml", "poses"});
   expect_error([] { parse_training_config("seed: 1\n", "c.yaml"); }, {"c.yaml", "stages", "missing"});
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 0}\n", "c.yaml"); }, {"c.yaml", "nothing to train"});

@@ -72,6 +72,17 @@ WEFT_GRADCHECK_CASES(loss_terms) {
   }
   {
     GradcheckCase c;
+    c.op = "mul";
+    c.name = case_prefix("keypoints_3d") + " points [2,5,3], triangulated targets, weights";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 5, 3}, -1, 1), uniform64(g, {2, 5, 3}, -1, 1),
+                                 uniform64(g, {2, 5}, 0, 1)};
+    };
+    c.function = [](const std::vector<Tensor>& in) { return capture::keypoint_3d_loss(in[0], in[1], in[2]); };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
     c.op = "image_sample_bilinear";
     c.name = case_prefix("silhouette") + " 5 boundary points in a 6x8 distance transform, per-point rho";
     c.make_inputs = [](Generator& g) {
