@@ -31,12 +31,13 @@ void run_evaluation(const capture::TrainOptions& o, const std::string& split) {
   weft::write_text_atomically(out, e.to_json());
   spdlog::info("{} frames × {} views ({:.1f} s){}: keypoints {:.2f} px (mean pose with the true root rotation {:.2f}), "
                "joints {:.1f} mm, root-relative {:.1f} mm (mean pose with the true root rotation {:.1f}), root rotation "
-               "{:.1f}° mean, {:.1f}° median, {:.1f} % above 45°; silhouette IoU {:.4f} (template {:.4f}); cloth {:.1f} mm, Chamfer {:.1f} mm (PADefNet off {:.1f}, "
+               "{:.1f}° mean, {:.1f}° median, {:.1f} % above 45° (heading {:.1f}° median, {:.1f} % above 45°); silhouette IoU {:.4f} (template {:.4f}); cloth {:.1f} mm, Chamfer {:.1f} mm (PADefNet off {:.1f}, "
                "the template skinned by the true pose {:.1f}), body {:.1f} mm",
                e.frames, e.views, e.seconds, e.oracle_pose ? " under the oracle pose" : "", e.keypoint_error_px,
                e.mean_pose_keypoint_error_px, e.joint_error_mm, e.joint_error_root_relative_mm,
                e.mean_pose_joint_error_root_relative_mm, e.root_rotation_error_deg, e.root_rotation_median_deg,
-               100 * e.root_rotation_above_45, e.silhouette_iou,
+               100 * e.root_rotation_above_45, e.root_heading_median_deg, 100 * e.root_heading_above_45,
+               e.silhouette_iou,
                e.template_silhouette_iou, e.cloth_error_mm, e.chamfer_mm, e.template_cloth_error_mm,
                e.skinned_true_pose_cloth_error_mm, e.body_error_mm);
   spdlog::info("penetration {:.2f} mm mean over the vertices inside, {:.3f} over all, {:.2f} max, {:.2f} % of cloth "

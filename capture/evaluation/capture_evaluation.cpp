@@ -211,7 +211,7 @@ void read_frames(EvaluationInputs& in, CaptureEvaluation& e) {
 struct Pooled {
   std::vector<double> cloth_distances, body_distances;  // for the 95th percentiles
   FrameMetricMeans means;
-  std::vector<double> root_rotation_deg;
+  std::vector<double> root_rotation_deg, root_heading_deg;
   BalancePool balance, gt_balance;
   FrameMeasures penetration, gt_penetration;  // sums over frames (depth, vertices inside)
 };
@@ -256,6 +256,7 @@ Kept measure_frame(const EvaluationInputs& in, const EvaluationOptions& o, int k
   measure_geometry(ch, predicted, truth, !std::binary_search(in.failed.begin(), in.failed.end(), f), fm);
   fm.pivot_error_mm = (cf.pivot - gt_pivot).norm() * mpu * 1e3;
   pool.root_rotation_deg.push_back(fm.root_rotation_error_deg);
+  pool.root_heading_deg.push_back(fm.root_heading_error_deg);
   pool.body_distances.insert(pool.body_distances.end(), fm.body_distances_mm.begin(), fm.body_distances_mm.end());
   pool.cloth_distances.insert(pool.cloth_distances.end(), fm.cloth_distances_mm.begin(), fm.cloth_distances_mm.end());
   fm.body_distances_mm.clear(), fm.cloth_distances_mm.clear();  // pooled: not kept per frame
@@ -312,6 +313,9 @@ void summarize(const EvaluationInputs& in, const Pooled& pool, CaptureEvaluation
   const RotationErrorSummary rotation = summarize_rotation_errors(pool.root_rotation_deg);
   e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
   e.root_rotation_above_45 = rotation.above_45;
+  const RotationErrorSummary heading = summarize_rotation_errors(pool.root_heading_deg);
+  e.root_heading_median_deg = heading.median_deg, e.root_heading_p95_deg = heading.p95_deg,
+  e.root_heading_above_45 = heading.above_45;
   if (e.has_cloth) {
     e.cloth_chamfer_mm = means.mean("cloth_chamfer_mm");
     e.cloth_error_mean_mm = means.mean("cloth_error_mean_mm");

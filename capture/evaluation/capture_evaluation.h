@@ -95,6 +95,9 @@ struct CaptureEvaluation {
   // the fraction of frames above 45° (front/back or side confusions).
   double root_rotation_median_deg = kNotMeasured, root_rotation_p95_deg = kNotMeasured,
          root_rotation_above_45 = kNotMeasured;
+  // The same of the heading error (heading_error_deg: the turn about the vertical alone).
+  double root_heading_median_deg = kNotMeasured, root_heading_p95_deg = kNotMeasured,
+         root_heading_above_45 = kNotMeasured;
   double seconds = 0;
 
   std::vector<EvaluationOverlay> overlays;

@@ -97,6 +97,9 @@ std::string CaptureEvaluation::to_json() const {
   s["root_rotation_deg"] = {{"median", root_rotation_median_deg},
                             {"p95", root_rotation_p95_deg},
                             {"fraction_above_45", root_rotation_above_45}};
+  s["root_heading_deg"] = {{"median", root_heading_median_deg},
+                           {"p95", root_heading_p95_deg},
+                           {"fraction_above_45", root_heading_above_45}};
   json& p = j["per_frame"];
   std::vector<int> ids;
   json shifts = json::array(), ious = json::array();
@@ -199,6 +202,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   row("root rotation error, median", num(e.root_rotation_median_deg, 2), "", "°");
   row("root rotation error, 95th percentile", num(e.root_rotation_p95_deg, 2), "", "°");
   row("frames with the root rotation off by more than 45°", num(100 * e.root_rotation_above_45, 2), "", "%");
+  row("heading error (the turn about the vertical), median", num(e.root_heading_median_deg, 2), "", "°");
+  row("frames with the heading off by more than 45° (front/back)", num(100 * e.root_heading_above_45, 2), "", "%");
   row("global translation error (pivot joint, before any shift)", num(e.pivot_error_mm, 2), "", "mm");
   h += "</table>\n<p>Definitions: docs/EVALUATION.md. The ground-truth column measures the dataset's own meshes "
        "the same way: the floor the data allows.</p>\n";

@@ -121,6 +121,13 @@ double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3
   return Eigen::AngleAxisd(predicted.transpose() * truth).angle() * 180 / std::numbers::pi;
 }
 
+double heading_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth) {
+  // Swing–twist: the twist of q about the axis u is (w, (v·u) u), normalised; its angle is
+  // 2 atan2(|v·u|, |w|) (the sign of a quaternion is free).
+  const Eigen::Quaterniond q(predicted * truth.transpose());
+  return 2 * std::atan2(std::abs(q.y()), std::abs(q.w())) * 180 / std::numbers::pi;
+}
+
 RotationErrorSummary summarize_rotation_errors(const std::vector<double>& errors_deg) {
   RotationErrorSummary s;
   if (errors_deg.empty()) return s;
@@ -139,6 +146,8 @@ const std::vector<FrameMetric>& frame_metrics() {
       {"mpjpe_root_relative_mm", "mm", "the same with both pivots at the origin", &M::mpjpe_root_relative_mm},
       {"root_rotation_error_deg", "°", "geodesic angle between the pivot joint's global rotations",
        &M::root_rotation_error_deg},
+      {"root_heading_error_deg", "°", "the twist about the vertical of that rotation error: front/back confusion, "
+       "without the pelvis's tilt", &M::root_heading_error_deg},
       {"body_error_mean_mm", "mm", "mean body vertex distance", &M::body_error_mean_mm},
       {"body_error_p95_mm", "mm", "95th percentile of the body vertex distances", &M::body_error_p95_mm},
       {"cloth_error_mean_mm", "mm", "mean cloth vertex distance", &M::cloth_error_mean_mm},
@@ -215,7 +224,10 @@ void measure_geometry(const Character& ch, const PosedFrame& p, const PosedFrame
   m.mpjpe_mm = mean_joint_error_mm(p.body25, t.body25, mpu);
   m.mpjpe_root_relative_mm = mean_joint_error_mm(p.body25.rowwise() - p.pivot.transpose(),
                                                  t.body25.rowwise() - t.pivot.transpose(), mpu);
-  if (p.root_rotation && t.root_rotation) m.root_rotation_error_deg = rotation_error_deg(*p.root_rotation, *t.root_rotation);
+  if (p.root_rotation && t.root_rotation) {
+    m.root_rotation_error_deg = rotation_error_deg(*p.root_rotation, *t.root_rotation);
+    m.root_heading_error_deg = heading_error_deg(*p.root_rotation, *t.root_rotation);
+  }
   m.body_distances_mm = vertex_distances_mm(p.body, t.body, mpu);
   m.body_error_mean_mm = mean_of(m.body_distances_mm);
   m.body_error_p95_mm = quantile(m.body_distances_mm, 0.95);

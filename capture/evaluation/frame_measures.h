@@ -57,6 +57,13 @@ std::vector<double> cloth_signed_distances_mm(const Character& character, const 
 // The geodesic angle (degrees, 0..180) between two rotations: the root orientation's error.
 double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
 
+// The heading error (degrees, 0..180): the twist about the world's vertical (+y) of
+// predicted · truthᵀ, the turn that takes the true orientation to the predicted one. A
+// rotation about the vertical counts whole, a tilt about a horizontal axis not at all: the
+// front/back confusion (180°) without the pelvis's pitch, which keypoints leave open (the
+// spine and hips above and below it can make up for it).
+double heading_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
+
 // Root orientation errors over predictions: the median, the 95th percentile and the
 // fraction above 45° (front/back and side confusions); NaN for none.
 struct RotationErrorSummary {
@@ -126,6 +133,7 @@ struct FrameMeasures {
   double pivot_error_mm = kNotMeasured;
   double mpjpe_mm = kNotMeasured, mpjpe_root_relative_mm = kNotMeasured;
   double root_rotation_error_deg = kNotMeasured;
+  double root_heading_error_deg = kNotMeasured;
   double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
   double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured, cloth_chamfer_mm = kNotMeasured;
   double penetration_mean_mm = kNotMeasured;      // over the cloth vertices inside (0 when none is)

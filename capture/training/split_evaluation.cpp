@@ -57,6 +57,8 @@ std::string SplitEvaluation::to_json() const {
   j["root_rotation_median_deg"] = root_rotation_median_deg;
   j["root_rotation_p95_deg"] = root_rotation_p95_deg;
   j["root_rotation_above_45"] = root_rotation_above_45;
+  j["root_heading_median_deg"] = root_heading_median_deg;
+  j["root_heading_above_45"] = root_heading_above_45;
   j["mean_pose_joint_error_root_relative_mm"] = mean_pose_joint_error_root_relative_mm;
   j["silhouette_iou"] = silhouette_iou;
   j["template_silhouette_iou"] = template_silhouette_iou;
@@ -174,7 +176,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.oracle_pose = cfg.oracle_pose;
   e.frames = int(frames.size());
   e.views = V;
-  std::vector<double> rotation_errors;
+  std::vector<double> rotation_errors, heading_errors;
   FrameMetricMeans means;
   MeasuredMean kp, iou, tmpl_iou;
   BalancePool balance;
@@ -241,6 +243,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         measure_geometry(ch, predicted, truth, true, fm);
         fm.body_distances_mm.clear(), fm.cloth_distances_mm.clear();  // not pooled here
         if (std::isfinite(fm.root_rotation_error_deg)) rotation_errors.push_back(fm.root_rotation_error_deg);
+        if (std::isfinite(fm.root_heading_error_deg)) heading_errors.push_back(fm.root_heading_error_deg);
         const Vertices body_t = sample_vertices(t.body, b);
         Vertices cloth_t;
         if (p.cloth.defined()) {
@@ -287,6 +290,8 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   const RotationErrorSummary rotation = summarize_rotation_errors(rotation_errors);
   e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
   e.root_rotation_above_45 = rotation.above_45;
+  const RotationErrorSummary heading = summarize_rotation_errors(heading_errors);
+  e.root_heading_median_deg = heading.median_deg, e.root_heading_above_45 = heading.above_45;
   e.mean_pose_joint_error_root_relative_mm = mean_joint_aligned.value();
   e.silhouette_iou = iou.value();
   e.template_silhouette_iou = tmpl_iou.value();

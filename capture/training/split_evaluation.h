@@ -53,6 +53,7 @@ struct SplitEvaluation {
   double root_rotation_error_deg = kNotMeasured;  // mean
   double root_rotation_median_deg = kNotMeasured, root_rotation_p95_deg = kNotMeasured,
          root_rotation_above_45 = kNotMeasured;  // the fraction of predictions above 45°
+  double root_heading_median_deg = kNotMeasured, root_heading_above_45 = kNotMeasured;  // heading_error_deg's
   double silhouette_iou = kNotMeasured, template_silhouette_iou = kNotMeasured;
   double cloth_error_mm = kNotMeasured, chamfer_mm = kNotMeasured, template_cloth_error_mm = kNotMeasured,
          skinned_true_pose_cloth_error_mm = kNotMeasured, body_error_mm = kNotMeasured;

@@ -582,7 +582,7 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   double kp_sum = 0, joint_sum = 0, iou_sum = 0, pen_sum = 0;
   int kp_n = 0, joint_n = 0, iou_n = 0, pen_n = 0, cloth_n = 0;
   MeasuredMean root_relative;
-  std::vector<double> rotation_errors;
+  std::vector<double> rotation_errors, heading_errors;
   const double mpu = character_.metres_per_unit;
   for (int first = 0; first < n; first += 8) {
     std::vector<Sample> s(std::min(8, n - first));
@@ -615,6 +615,7 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
           for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) R(r, c) = p.rotation.data<float>()[9 * b + 3 * r + c];
           rotation_errors.push_back(rotation_error_deg(R, truth.rotation));
+          heading_errors.push_back(heading_error_deg(R, truth.rotation));
         }
       }
       const Vertices body = sample_vertices(p.body, b);
@@ -642,6 +643,8 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
   rep.joint_error_root_relative_mm = root_relative.value();
   const RotationErrorSummary rotation = summarize_rotation_errors(rotation_errors);
   rep.root_rotation_median_deg = rotation.median_deg, rep.root_rotation_above_45 = rotation.above_45;
+  const RotationErrorSummary heading = summarize_rotation_errors(heading_errors);
+  rep.root_heading_median_deg = heading.median_deg, rep.root_heading_above_45 = heading.above_45;
   rep.silhouette_iou = iou_n ? iou_sum / iou_n : 0;
   rep.penetration_mean_mm = pen_n ? pen_sum / pen_n : 0;
   rep.penetrating_fraction = cloth_n ? double(pen_n) / cloth_n : 0;
@@ -665,18 +668,20 @@ void append_validation(const fs::path& path, const ValidationReport& r) {
   std::ofstream out(path, std::ios::app);
   if (fresh)
     out << "step,samples,keypoint_error_px,joint_error_mm,silhouette_iou,penetration_mean_mm,penetration_max_mm,"
-           "penetrating_fraction,joint_error_root_relative_mm,root_rotation_median_deg,root_rotation_above_45\n";
+           "penetrating_fraction,joint_error_root_relative_mm,root_rotation_median_deg,root_rotation_above_45,"
+           "root_heading_median_deg,root_heading_above_45\n";
   out << r.step << ',' << r.samples << ',' << r.keypoint_error_px << ',' << r.joint_error_mm << ','
       << r.silhouette_iou << ',' << r.penetration_mean_mm << ',' << r.penetration_max_mm << ','
       << r.penetrating_fraction << ',' << r.joint_error_root_relative_mm << ',' << r.root_rotation_median_deg << ','
-      << r.root_rotation_above_45 << '\n';
+      << r.root_rotation_above_45 << ',' << r.root_heading_median_deg << ',' << r.root_heading_above_45 << '\n';
 }
 
 // RUN/validation.png, the learning curves: validation.csv's error columns against the
 // step, one panel each, the stages named from the config's step ranges.
 void plot_validation(const fs::path& csv, const std::vector<StageConfig>& stages) {
   static const std::vector<std::string> plotted = {
-      "joint_error_root_relative_mm", "root_rotation_median_deg", "root_rotation_above_45", "joint_error_mm",
+      "joint_error_root_relative_mm", "root_rotation_median_deg", "root_rotation_above_45", "root_heading_median_deg",
+      "root_heading_above_45", "joint_error_mm",
       "keypoint_error_px",            "silhouette_iou",           "penetration_mean_mm"};
   const auto cells_of = [](const std::string& line) {
     std::vector<std::string> cells;
@@ -750,10 +755,11 @@ void append_parameter_checksum(const fs::path& path, int64_t step, const Capture
 
 void log_validation(const ValidationReport& r) {
   spdlog::info("validation at step {}: {} samples, keypoints {:.2f} px, joints {:.1f} mm ({:.1f} mm root-relative), "
-               "root rotation median {:.1f}° ({:.1f} % above 45°), silhouette IoU {:.4f}, "
+               "root rotation median {:.1f}° ({:.1f} % above 45°), heading {:.1f}° ({:.1f} % above 45°), silhouette IoU {:.4f}, "
                "penetration mean {:.2f} mm max {:.2f} mm ({:.2f} % of cloth vertices)",
                r.step, r.samples, r.keypoint_error_px, r.joint_error_mm, r.joint_error_root_relative_mm,
-               r.root_rotation_median_deg, 100 * r.root_rotation_above_45, r.silhouette_iou, r.penetration_mean_mm,
+               r.root_rotation_median_deg, 100 * r.root_rotation_above_45, r.root_heading_median_deg,
+               100 * r.root_heading_above_45, r.silhouette_iou, r.penetration_mean_mm,
                r.penetration_max_mm, 100 * r.penetrating_fraction);
 }
 

@@ -58,6 +58,9 @@ struct ValidationReport {
   double joint_error_root_relative_mm = std::numeric_limits<double>::quiet_NaN();
   double root_rotation_median_deg = std::numeric_limits<double>::quiet_NaN();
   double root_rotation_above_45 = std::numeric_limits<double>::quiet_NaN();
+  // The heading error's (the turn about the vertical alone: front/back confusion).
+  double root_heading_median_deg = std::numeric_limits<double>::quiet_NaN();
+  double root_heading_above_45 = std::numeric_limits<double>::quiet_NaN();
   double silhouette_iou = 0;      // predicted body+cloth vs mask, mean over samples × views
   double penetration_mean_mm = 0; // mean depth of cloth vertices inside the body (over those inside)
   double penetration_max_mm = 0;

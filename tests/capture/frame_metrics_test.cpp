@@ -149,6 +149,17 @@ std::vector<MetricCase> metric_cases() {
                              180, 1e-6);
                  EXPECT_TRUE(std::isnan(geometry([](PosedFrame& p) { p.root_rotation.reset(); }).root_rotation_error_deg));
                }});
+  c.push_back({"root_heading_error_deg", "turned 30° about the vertical: 30; tilted 40° forward: 0; front/back: 180", [] {
+                 const auto heading = [](const Eigen::AngleAxisd& turn) {
+                   return geometry([&](PosedFrame& p) { p.root_rotation = turn.toRotationMatrix(); })
+                       .root_heading_error_deg;
+                 };
+                 EXPECT_NEAR(heading(Eigen::AngleAxisd(std::numbers::pi / 6, Eigen::Vector3d::UnitY())), 30, 1e-9);
+                 EXPECT_NEAR(heading(Eigen::AngleAxisd(-std::numbers::pi / 6, Eigen::Vector3d::UnitY())), 30, 1e-9);
+                 EXPECT_NEAR(heading(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX())), 0, 1e-9);
+                 EXPECT_NEAR(heading(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY())), 180, 1e-6);
+                 EXPECT_TRUE(std::isnan(geometry([](PosedFrame& p) { p.root_rotation.reset(); }).root_heading_error_deg));
+               }});
   c.push_back({"body_error_mean_mm", "the body 5 mm to the side", [] {
                  EXPECT_NEAR(geometry([](PosedFrame& p) { p.body = moved(p.body, {0.005, 0, 0}); }).body_error_mean_mm,
                              5, 1e-9);

@@ -170,15 +170,18 @@ TEST(Training, EveryStageOfTheTinyConfigRunsAndLowersItsLoss) {
   std::getline(validation, header);
   EXPECT_EQ(header,
             "step,samples,keypoint_error_px,joint_error_mm,silhouette_iou,penetration_mean_mm,penetration_max_mm,"
-            "penetrating_fraction,joint_error_root_relative_mm,root_rotation_median_deg,root_rotation_above_45");
+            "penetrating_fraction,joint_error_root_relative_mm,root_rotation_median_deg,root_rotation_above_45,"
+            "root_heading_median_deg,root_heading_above_45");
   while (std::getline(validation, row)) last = row;
   std::vector<double> c;
   std::stringstream cells(last);
   for (std::string v; std::getline(cells, v, ',');) c.push_back(std::stod(v));
-  ASSERT_EQ(c.size(), 11u) << last;
+  ASSERT_EQ(c.size(), 13u) << last;
   EXPECT_GT(c[8], 0.0) << last;  // an untrained PoseNet's articulated pose is off
   EXPECT_TRUE(c[9] >= 0 && c[9] <= 180) << last;
   EXPECT_TRUE(c[10] >= 0 && c[10] <= 1) << last;
+  EXPECT_TRUE(c[11] >= 0 && c[11] <= c[9] + 1e-9) << last;  // the heading is part of the rotation's error
+  EXPECT_TRUE(c[12] >= 0 && c[12] <= 1) << last;
   EXPECT_GE(f.validation_iou, 0.0);
   EXPECT_GT(f.validation_samples, 0);
 }
@@ -264,7 +267,7 @@ TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
   std::vector<std::string> c;
   std::stringstream ss(row);
   for (std::string v; std::getline(ss, v, ',');) c.push_back(v);
-  ASSERT_EQ(c.size(), 11u) << row;
+  ASSERT_EQ(c.size(), 13u) << row;
   // Only PADefNet's graph moves the keypoints off the ground truth's (by millimetres after
   // 5 steps; an untrained PoseNet is hundreds of millimetres off).
   EXPECT_LT(std::stod(c[3]), 20.0) << "joint error (mm) under the oracle pose: " << row;
