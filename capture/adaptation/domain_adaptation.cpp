@@ -101,10 +101,11 @@ std::string adaptation_config(const ModelFolder& model, int iterations) {
       "# `weft adapt` of {}: both networks refined on the test sequence with one camera's\n"
       "# losses (capture/adaptation/domain_adaptation.h); generated from the model's config.\n"
       "seed: {}\n"
-      "network: {{backbone: {}, input_size: {}, margin: {}, dof_scale: {}, angle_scale: {}, translation_scale_m: {}}}\n"
+      "network: {{backbone: {}, input_size: {}, margin: {}, dof_scale: {}, angle_scale: {}, translation_scale_m: {}, "
+      "keypoint_input: {}}}\n"
       "stages:\n",
       model.dir, c.seed, c.network.backbone, c.network.input_size, c.network.margin, c.network.dof_scale,
-      c.network.angle_scale, c.network.translation_scale_m);
+      c.network.angle_scale, c.network.translation_scale_m, c.network.keypoint_input);
   LossWeights pose_weights;
   pose_weights.landmarks = c.stages[0].weights.landmarks > 0 ? c.stages[0].weights.landmarks : 1;
   y += stage_line("pose", iterations, c.stages[0], pose_weights);

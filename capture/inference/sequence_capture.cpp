@@ -181,7 +181,7 @@ NetworkOutputs run_networks(const CaptureContext& c, const NetworkConfig& networ
     if (samples.empty()) break;
     const Batch batch = make_batch(samples);
     NoGradGuard no_grad;
-    const Tensor pose = nets.pose_net->forward(batch.images).to(DType::F64);
+    const Tensor pose = nets.pose(batch).to(DType::F64);
     const Tensor deformation = nets.deformation_net->forward(batch.images).to(DType::F64);
     for (int b = 0; b < batch.size(); ++b) {
       net.pose_rows.push_back(Eigen::Map<const Eigen::VectorXd>(pose.data<double>() + b * pose.size(1), pose.size(1)));

@@ -1,10 +1,13 @@
 #include "capture/model/capture_networks.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "capture/character/skeleton.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
+#include "graph/random.h"
+#include "nn/layers.h"
 #include "ops/geometry.h"
 #include "ops/ops.h"
 
@@ -73,6 +76,57 @@ CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig
   // Zero last layer: PADefNet starts at A = 0, T = 0, the skinned template.
   deformation_net->fc->weight.fill(0.0);
   deformation_net->fc->bias.fill(0.0);
+  input_size_ = config.input_size;
+  if (config.keypoint_input) {
+    Generator gen(seed + 2);
+    constexpr int64_t hidden = 512;
+    pose_lift = std::make_shared<nn::Sequential>();
+    pose_lift->push_back(std::make_shared<nn::Linear>(kLiftInputs, hidden, gen));
+    pose_lift->push_back(std::make_shared<nn::ReLU>());
+    pose_lift->push_back(std::make_shared<nn::Linear>(hidden, hidden, gen));
+    pose_lift->push_back(std::make_shared<nn::ReLU>());
+    // Zero last layer: the branch starts as no change to PoseNet's output.
+    pose_lift->push_back(std::make_shared<nn::Linear>(hidden, pose_outputs_, gen, true, DType::F32, false));
+    register_module("pose_lift", pose_lift);
+  }
+}
+
+Tensor CaptureNetworks::pose(const Batch& batch) {
+  const Tensor image_out = pose_net->forward(batch.images);
+  if (!pose_lift) return image_out;
+  return ops::add(image_out, pose_lift->forward(keypoint_lift_input(batch, input_size_)));
+}
+
+std::vector<nn::NamedTensor> CaptureNetworks::pose_parameters() const {
+  std::vector<nn::NamedTensor> params;
+  for (nn::NamedTensor p : pose_net->named_parameters()) params.push_back({"pose_net." + p.name, p.tensor});
+  if (pose_lift)
+    for (nn::NamedTensor p : pose_lift->named_parameters()) params.push_back({"pose_lift." + p.name, p.tensor});
+  return params;
+}
+
+Tensor keypoint_lift_input(const Batch& batch, int input_size) {
+  const int64_t B = batch.size();
+  WEFT_CHECK(batch.keypoints.dim() == 3 && batch.keypoints.size(0) == B && batch.keypoints.size(1) == kBody25Count &&
+                 batch.keypoints.size(2) == 3 && int64_t(batch.cameras.size()) == B,
+             "keypoint_lift_input: keypoints [B,25,3] and B crop cameras expected");
+  const Tensor kp = batch.keypoints.to(DType::F64);
+  const double* k = kp.data<double>();
+  std::vector<double> x(size_t(B * kLiftInputs), 0.0);
+  for (int64_t b = 0; b < B; ++b) {
+    double* row = x.data() + b * kLiftInputs;
+    for (int j = 0; j < kBody25Count; ++j) {
+      const double* d = k + (b * kBody25Count + j) * 3;
+      if (!(d[2] > 0) || !std::isfinite(d[0]) || !std::isfinite(d[1])) continue;
+      row[3 * j] = d[0] / input_size - 0.5;
+      row[3 * j + 1] = d[1] / input_size - 0.5;
+      row[3 * j + 2] = d[2];
+    }
+    const Eigen::Matrix3d& K = batch.cameras[size_t(b)].K;
+    row[3 * kBody25Count] = (0.5 * input_size - K(0, 2)) / K(0, 0);
+    row[3 * kBody25Count + 1] = (0.5 * input_size - K(1, 2)) / K(1, 1);
+  }
+  return Tensor::from_data({B, kLiftInputs}, x, DType::F32);
 }
 
 Tensor CaptureNetworks::forward(const Tensor&) {
@@ -254,7 +308,12 @@ CapturePrediction predict_batch(CaptureNetworks& nets, const CaptureModel& model
                                            learning == Learning::deformation)
                                      : Tensor();
   if (oracle_dofs.defined()) return model.predict_posed(oracle_dofs, def_out, with_meshes);
-  const Tensor pose_out = run(*nets.pose_net, learning == Learning::pose, true);
+  nets.pose_net->train(learning == Learning::pose);
+  const Tensor pose_out = [&] {
+    if (learning == Learning::pose) return nets.pose(batch);
+    NoGradGuard no_grad;
+    return nets.pose(batch);
+  }();
   return model.predict(pose_out, def_out, batch_views(batch, sup, model), with_meshes);
 }
 

@@ -50,18 +50,36 @@ PoseParametrisation pose_parametrisation(const Character& character);
 Eigen::Matrix3d root_rotation_world(const Character& character, const PoseParametrisation& param,
                                     const PosedCharacter& posed);
 
-// Both networks as one module (checkpoints hold both: "pose_net.*", "deformation_net.*").
+// Both networks as one module (checkpoints hold both: "pose_net.*", "deformation_net.*",
+// and "pose_lift.*" with network.keypoint_input).
 class CaptureNetworks : public nn::Module {
  public:
   CaptureNetworks(const Character& character, const NetworkConfig& config, uint64_t seed);
-  Tensor forward(const Tensor& x) override;  // not used: call pose_net / deformation_net
+  Tensor forward(const Tensor& x) override;  // not used: call pose / deformation_net
+  // PoseNet's output [B, pose_outputs()] for a batch: the ResNet on the images plus, with
+  // network.keypoint_input, the lifting branch on the input view's detections (pose_lift).
+  // Train or evaluation mode is pose_net's (the branch has no batch norm).
+  Tensor pose(const Batch& batch);
+  // PoseNet's trainable parameters, named as in checkpoints ("pose_net.*", "pose_lift.*").
+  std::vector<nn::NamedTensor> pose_parameters() const;
   std::shared_ptr<nn::ResNet> pose_net, deformation_net;
+  // The lifting branch (null without network.keypoint_input): an MLP from the detections
+  // (keypoint_lift_input) to an addition to pose_net's output, last layer zero at the start.
+  std::shared_ptr<nn::Sequential> pose_lift;
   int64_t pose_outputs() const { return pose_outputs_; }
   int64_t deformation_outputs() const { return deformation_outputs_; }
 
  private:
   int64_t pose_outputs_ = 0, deformation_outputs_ = 0;
+  int input_size_ = 128;
 };
+
+// The lifting branch's input [B, 77] from a batch: per BODY_25 keypoint its crop position
+// scaled to [-0.5, 0.5] and its confidence (all three 0 without a detection), then the
+// direction of the crop centre's ray in the input camera (x/z, y/z), which turns the
+// person's apparent orientation in the crop into the camera-relative one PoseNet regresses.
+constexpr int64_t kLiftInputs = 3 * kBody25Count + 2;
+Tensor keypoint_lift_input(const Batch& batch, int input_size);
 
 // Per sample, what places its skeleton in the world: the input view's rotation and the
 // root translation terms from the frame's detections.

@@ -8,7 +8,9 @@ void parse_network_config(const StrictYaml& y, const YAML::Node& n, NetworkConfi
              {"dof_scale", &c.dof_scale, 1e-6, 100},
              {"angle_scale", &c.angle_scale, 1e-6, 100},
              {"translation_scale_m", &c.translation_scale_m, 1e-6, 100}},
-            {{"input_size", &c.input_size, 32, 1024}}, {"backbone"});
+            {{"input_size", &c.input_size, 32, 1024}}, {"backbone", "keypoint_input"});
+  if (n["keypoint_input"])
+    c.keypoint_input = y.get<bool>(n["keypoint_input"], "network.keypoint_input", "true or false");
   if (n["backbone"]) {
     c.backbone = y.get<std::string>(n["backbone"], "network.backbone", "resnet18, resnet34 or resnet50");
     if (c.backbone != "resnet18" && c.backbone != "resnet34" && c.backbone != "resnet50")

@@ -15,6 +15,10 @@ struct NetworkConfig {
   double dof_scale = 0.1;             // PoseNet: dof = rest + dof_scale · output (radians, units); limited dofs: pose_dofs.h
   double angle_scale = 0.05;          // PADefNet: node Euler angle = angle_scale · output (radians)
   double translation_scale_m = 0.01;  // PADefNet: node translation = this · output (metres)
+  // PoseNet also reads the input view's 2D detections (a lifting branch, CaptureNetworks):
+  // the labelled keypoints tell the person's left from right, which the pixels of a
+  // front and a back view barely do.
+  bool keypoint_input = false;
 };
 
 // Reads the `network` section `n` into `c` (absent keys keep their value); errors name the

@@ -205,7 +205,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
         t = model.predict_posed(dofs, Tensor());
       } else {
         const SampleViews views = batch_views(batch, sup, model);
-        const Tensor pose_out = nets.pose_net->forward(batch.images);
+        const Tensor pose_out = nets.pose(batch);
         p = model.predict(pose_out, deformation, views);
         t = model.predict(pose_out, Tensor(), views);
       }

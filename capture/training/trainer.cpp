@@ -180,10 +180,12 @@ class Trainer {
     nn::AdamWOptions o;
     o.lr = stage.lr;
     o.weight_decay = stage.weight_decay;
-    const auto& net = stage.kind == StageKind::pose ? nets_.pose_net : nets_.deformation_net;
     std::vector<nn::NamedTensor> params;
-    const std::string prefix = stage.kind == StageKind::pose ? "pose_net." : "deformation_net.";
-    for (nn::NamedTensor p : net->named_parameters()) params.push_back({prefix + p.name, p.tensor});
+    if (stage.kind == StageKind::pose)
+      params = nets_.pose_parameters();
+    else
+      for (nn::NamedTensor p : nets_.deformation_net->named_parameters())
+        params.push_back({"deformation_net." + p.name, p.tensor});
     return std::make_unique<nn::AdamW>(std::move(params), o);
   }
   CapturePrediction forward(const Batch& batch, StageKind stage, bool training, PartTimes* times = nullptr);

@@ -69,6 +69,11 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 0}\n", "c.yaml"); }, {"c.yaml", "nothing to train"});
   expect_error([] { parse_training_config(std::string(kStages) + "network: {backbone: vgg16}\n", "c.yaml"); },
                {"c.yaml:3", "network.backbone", "vgg16"});
+  EXPECT_TRUE(parse_training_config(std::string(kStages) + "network: {keypoint_input: true}\n", "c.yaml")
+                  .network.keypoint_input);
+  EXPECT_FALSE(parse_training_config(std::string(kStages), "c.yaml").network.keypoint_input);
+  expect_error([] { parse_training_config(std::string(kStages) + "network: {keypoint_input: maybe}\n", "c.yaml"); },
+               {"c.yaml:3", "network.keypoint_input", "true or false"});
   // The garment's simulation comes from the dataset (dataset.yaml), not from a recipe's path.
   expect_error(
       [] { parse_training_config("stages:\n  physics: {steps: 4, simulation: 1}\nphysics: {synth_config: x}\n", "c.yaml"); },

@@ -30,7 +30,10 @@
 #include "capture/training/loss_log.h"
 #include "capture/training/multiview_losses.h"
 #include "capture/training/trainer.h"
+#include "graph/autograd.h"
 #include "nn/checkpoint.h"
+#include "nn/optim.h"
+#include "ops/ops.h"
 
 using namespace weft;
 using namespace weft::capture;
@@ -470,4 +473,114 @@ TEST(CaptureModel, ExpressesTheGroundTruthPose) {
       EXPECT_LT(((body.rowwise() - shift) - gt.body).rowwise().norm().maxCoeff(), 1e-4) << "body vertices, m";
     }
   }
+}
+
+// network.keypoint_input: PoseNet's lifting branch reads the input view's detections
+// (crop positions scaled to ±0.5, confidences, the crop centre's ray), starts as no change
+// to the ResNet's output, learns from a loss on the output, and is saved and read back
+// with the networks.
+TEST(CaptureNetworks, TheKeypointBranchReadsTheDetectionsLearnsAndIsSaved) {
+  REQUIRE_HUMAN();
+  const fs::path data = tiny_data();
+  const DatasetInfo info = read_dataset_info(data.string());
+  const Character ch = load_character(info.character);
+  NetworkConfig config;
+  config.input_size = 64;
+  config.keypoint_input = true;
+  DatasetOptions options;
+  options.input_size = config.input_size;
+  const SyntheticDataset ds(data.string(), options);
+  Batch batch = make_batch({ds.load(0), ds.load(1)});
+  float* k = batch.keypoints.data<float>();
+  k[3 * 4 + 2] = 0;  // sample 0 loses its right wrist's detection
+
+  const weft::Tensor x = keypoint_lift_input(batch, config.input_size);
+  ASSERT_EQ(x.size(0), 2);
+  ASSERT_EQ(x.size(1), kLiftInputs);
+  const float* in = x.data<float>();
+  int detected = 0;
+  for (int b = 0; b < 2; ++b)
+    for (int j = 0; j < kBody25Count; ++j) {
+      const float* d = k + (b * kBody25Count + j) * 3;
+      const float* r = in + b * kLiftInputs + 3 * j;
+      if (d[2] > 0) {
+        ++detected;
+        EXPECT_NEAR(r[0], d[0] / 64.0 - 0.5, 1e-6);
+        EXPECT_NEAR(r[1], d[1] / 64.0 - 0.5, 1e-6);
+        EXPECT_NEAR(r[2], d[2], 1e-6);
+        EXPECT_LT(std::abs(r[0]), 0.5 + 1e-6) << "a detection inside the crop is within ±0.5";
+      } else {
+        EXPECT_EQ(r[0], 0.f);
+        EXPECT_EQ(r[1], 0.f);
+        EXPECT_EQ(r[2], 0.f);
+      }
+    }
+  EXPECT_GT(detected, 20);
+  EXPECT_EQ(in[3 * 4 + 2], 0.f) << "the dropped detection reads as none";
+  // The ray's last two inputs: the camera-frame direction (x/z, y/z, 1) that projects to the
+  // crop's centre.
+  for (int b = 0; b < 2; ++b) {
+    const Camera& cam = batch.cameras[size_t(b)];
+    const Eigen::Vector3d ray(in[b * kLiftInputs + 75], in[b * kLiftInputs + 76], 1.0);
+    const Eigen::Vector3d world = cam.R.transpose() * (3.0 * ray - cam.t);
+    const Eigen::Vector2d uv = cam.project(world);
+    EXPECT_NEAR(uv.x(), 32.0, 0.05);
+    EXPECT_NEAR(uv.y(), 32.0, 0.05);
+  }
+
+  CaptureNetworks nets(ch, config, 7);
+  ASSERT_TRUE(nets.pose_lift);
+  nets.pose_net->train(false);
+  weft::Tensor with_branch, image_only;
+  {
+    weft::NoGradGuard no_grad;
+    with_branch = nets.pose(batch);
+    image_only = nets.pose_net->forward(batch.images);
+  }
+  for (int64_t i = 0; i < with_branch.numel(); ++i)
+    ASSERT_EQ(with_branch.data<float>()[i], image_only.data<float>()[i]) << "the branch starts at zero";
+
+  std::vector<weft::nn::NamedTensor> params = nets.pose_parameters();
+  int lift_params = 0;
+  for (const auto& p : params) lift_params += p.name.rfind("pose_lift.", 0) == 0;
+  EXPECT_EQ(lift_params, 6) << "three linear layers' weights and biases";
+  weft::nn::AdamWOptions o;
+  o.lr = 1e-3;
+  weft::nn::AdamW opt(params, o);
+  // Pull PoseNet's first output toward 1 for sample 0: only the detections tell the
+  // branch's contribution apart between the two samples.
+  double first = 0, last = 0;
+  for (int step = 0; step < 20; ++step) {
+    opt.zero_grad();
+    const weft::Tensor out = nets.pose(batch);
+    const weft::Tensor loss = weft::ops::sum(weft::ops::mul(weft::ops::add_scalar(weft::ops::slice(out, 1, 0, 1), -1.0),
+                                                            weft::ops::add_scalar(weft::ops::slice(out, 1, 0, 1), -1.0)));
+    const double value = loss.item();
+    if (step == 0) first = value;
+    last = value;
+    loss.backward();
+    opt.step();
+  }
+  EXPECT_LT(last, 0.5 * first) << "the loss falls";
+  weft::Tensor learnt;
+  {
+    weft::NoGradGuard no_grad;
+    learnt = nets.pose(batch);
+  }
+  const fs::path file = scratch_root() / "keypoint_branch.safetensors";
+  fs::create_directories(file.parent_path());
+  weft::nn::save_weights(file.string(), nets);
+  CaptureNetworks read_back(ch, config, 99);
+  weft::nn::load_weights(file.string(), read_back);
+  read_back.pose_net->train(false);
+  weft::NoGradGuard no_grad;
+  const weft::Tensor again = read_back.pose(batch);
+  for (int64_t i = 0; i < learnt.numel(); ++i)
+    ASSERT_EQ(again.data<float>()[i], learnt.data<float>()[i]) << "output " << i << " after save and load";
+  // The branch changed the output: without it the networks read back differ.
+  const weft::Tensor without = read_back.pose_net->forward(batch.images);
+  double moved = 0;
+  for (int64_t i = 0; i < learnt.numel(); ++i)
+    moved = std::max(moved, double(std::abs(learnt.data<float>()[i] - without.data<float>()[i])));
+  EXPECT_GT(moved, 1e-4);
 }
