@@ -83,6 +83,18 @@ void crouch(Pose& p, double kappa) {
   p.root_offset.y() -= drop_for_knee(kappa);
 }
 
+void tilt_pelvis(Pose& p, double pitch_deg) {
+  // The hip joints' offset from the pelvis, (±x, y, z) = (±0.09, −0.07, 0), turned by
+  // Rx(pitch) (the trunk bends forward under Rx(+θ)); the pelvis moves by h − Rx h so they
+  // stay where they were, in the heading frame the pose's offset is in.
+  const double y = kJoints[l_hip].y, z = kJoints[l_hip].z, c = std::cos(rad(pitch_deg)), s = std::sin(rad(pitch_deg));
+  p.pitch += pitch_deg;
+  p.root_offset.y() += y - (c * y - s * z);
+  p.root_offset.z() += z - (s * y + c * z);
+  p.a[l_hip].flex += pitch_deg;
+  p.a[r_hip].flex += pitch_deg;
+}
+
 double hip_for_foot_lift(double lift_m) {
   return deg(std::acos(std::clamp(1 - lift_m / (2 * kThigh), -1.0, 1.0)));
 }

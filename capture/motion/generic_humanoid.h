@@ -54,6 +54,10 @@ double drop_for_knee(double knee_deg);
 void crouch(Pose& p, double kappa);
 // Hip flexion (degrees) that lifts a foot by `lift_m` with the knee bent twice as much
 // and the ankle by as much, keeping the foot level.
+// Tilts the pelvis forward by `pitch_deg` (backward when < 0) about its left axis with the
+// legs left where they were: the hips flex by the same angle and the pelvis moves so the
+// hip joints stay put (bending at the hips, as people do when they bow or squat).
+void tilt_pelvis(Pose& p, double pitch_deg);
 double hip_for_foot_lift(double lift_m);
 
 // Writes frame f of a motion of the generic humanoid: pose p with the pelvis at floor

@@ -78,7 +78,7 @@ RandomMotionConfig::RandomMotionConfig() {
 
 const std::vector<const char*>& random_motion_keys() {
   static const std::vector<const char*> keys{"seed",   "key_interval", "hold_probability", "max_speed", "turn",
-                                             "step",   "crouch",       "joints"};
+                                             "step",   "crouch",       "pelvis",          "joints"};
   return keys;
 }
 
@@ -109,6 +109,10 @@ RandomMotionConfig parse_random_motion_config(const StrictYaml& y, const YAML::N
     y.check_keys(s, w + "crouch", {"probability", "depth"});
     if (s["probability"]) c.crouch_probability = probability(y, s["probability"], w + "crouch.probability");
     if (s["depth"]) c.crouch_depth_m = parse_range(y, s["depth"], w + "crouch.depth", 0, 0.5, false);
+  }
+  if (const YAML::Node s = n["pelvis"]) {
+    y.check_keys(s, w + "pelvis", {"pitch"});
+    if (s["pitch"]) c.pelvis_pitch_deg = parse_range(y, s["pitch"], w + "pelvis.pitch", -60, 90, true);
   }
   if (const YAML::Node js = n["joints"]) {
     std::vector<const char*> names;
@@ -175,7 +179,8 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
   // Values per key. Interior keys draw every value (fixed count per key); the first and
   // last keys are the neutral pose.
   std::vector<std::vector<double>> angles(kRandomJointCount * 2 * 3, std::vector<double>(K, 0.0));
-  std::vector<double> heading(K, 0.0), knee(K, 0.0);
+  std::vector<double> heading(K, 0.0), knee(K, 0.0), pitch(K, 0.0);
+  PortableRandom pelvis_rng(c.seed ^ 0x9e3779b97f4a7c15ull);  // its own stream: see pelvis_pitch_deg
   double target = 0;  // heading target (degrees, relative to the start)
   enum Group { torso, neck_head, left_arm, right_arm, kGroups };
   auto group_of = [](int j, int side) {
@@ -207,6 +212,14 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
           v[k] = last ? 0.0 : keep ? v[k - 1] : v[k - 1] + std::clamp(drawn[a] - v[k - 1], -step, step);
         }
       }
+    {
+      const bool last = k + 1 == K, returning = times_[k] > duration_s - kReturn_s;
+      const double u = pelvis_rng.uniform(c.pelvis_pitch_deg.lo, c.pelvis_pitch_deg.hi), drawn = returning ? 0.0 : u;
+      const double step = c.max_speed_deg_s * (times_[k] - times_[k - 1]);
+      pitch[k] = last ? 0.0
+                 : hold[torso] && !returning ? pitch[k - 1]
+                                             : pitch[k - 1] + std::clamp(drawn - pitch[k - 1], -step, step);
+    }
     const double u_turn = rng.uniform(), new_target = rng.uniform(0, 360);
     if (u_turn < c.turn_probability) target = heading[k - 1] + std::remainder(new_target - heading[k - 1], 360.0);
     heading[k] = heading[k - 1] + std::clamp(target - heading[k - 1], -c.max_turn_deg, c.max_turn_deg);
@@ -216,6 +229,7 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
   for (const auto& v : angles) angles_.push_back(curve(v));
   heading_ = curve(heading);
   crouch_knee_ = curve(knee);
+  pelvis_pitch_ = curve(pitch);
 
   // Steps: in an interval that starts and ends standing (the knee then stays straight
   // through it, so a lifted foot never needs more knee than its lift), with probability
@@ -245,6 +259,7 @@ Pose RandomMotion::pose(double t) const {
       for (int axis = 0; axis < 3; ++axis) axis_of(a, axis) += eval(angles_[curve_index(j, side, axis)], t);
     }
   crouch(p, std::max(0.0, eval(crouch_knee_, t)));
+  tilt_pelvis(p, eval(pelvis_pitch_, t));
   for (const Step& s : steps_) {
     if (t <= s.start || t >= s.end) continue;
     const double lift = std::pow(std::sin(kPi * (t - s.start) / (s.end - s.start)), 2);  // C1: zero slope at the ends

@@ -16,6 +16,9 @@
 // neutral standing pose (every range contains 0) with zero velocity, so the segment joins
 // its neighbours C1.
 //
+// Pelvis: tilted forward or back within its range (a bow at the hips), the hips flexing
+// by the same angle so the legs stay where they were.
+//
 // Legs: a crouch bends hips, knees and ankles together and lowers the pelvis by exactly
 // what the bent legs lose in height (humanoid::crouch), so the feet stay flat on the floor;
 // stepping lifts one foot at a time (sin² profiles, C1) with the knee and ankle keeping it
@@ -65,6 +68,10 @@ struct RandomMotionConfig {
   // Crouching: per key, with this probability, a pelvis drop drawn in depth (m).
   double crouch_probability = 0.3;
   AngleRange crouch_depth_m{0.05, 0.35};
+  // Pelvis tilt (degrees, + forward) with the legs kept in place (humanoid::tilt_pelvis):
+  // bending at the hips. Drawn with the torso (same hold), from a stream of its own, so a
+  // zero range gives the motion the seed gave before the tilt existed.
+  AngleRange pelvis_pitch_deg{-10, 40};
   std::array<JointRanges, kRandomJointCount> joints{};  // set by default_random_joint_ranges()
   RandomMotionConfig();
 };
@@ -99,7 +106,7 @@ class RandomMotion {
   // Anatomical angles per sampled joint and side (arms: 0 left, 1 right), in the order
   // flex, abd, twist.
   std::vector<Curve> angles_;  // index: (joint × 2 + side) × 3 + axis
-  Curve heading_, crouch_knee_;
+  Curve heading_, crouch_knee_, pelvis_pitch_;
   struct Step {
     double start, end;  // s
     int side;           // 0 left, 1 right

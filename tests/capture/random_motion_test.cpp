@@ -157,7 +157,49 @@ TEST(RandomMotion, FeetStayOnTheFloor) {
   EXPECT_LT(highest_stance, 0.01);   // one foot always on it
 }
 
+// The pelvis tilts within its range (a bow at the hips) and the legs stay exactly where the
+// same seed without a tilt puts them; the head goes forward and down.
+TEST(RandomMotion, ThePelvisTiltsWithTheLegsInPlace) {
+  auto spec = [](const std::string& pelvis) {
+    return parse_motion_spec("segments:\n  - {type: random, duration: 30, seed: 4" + pelvis + "}\n", "r.yaml");
+  };
+  const BvhMotion tilted = generate_motion(spec("")), upright = generate_motion(spec(", pelvis: {pitch: [0, 0]}"));
+  const BvhMotion narrow = generate_motion(spec(", pelvis: {pitch: [-5, 20]}"));
+  ASSERT_EQ(tilted.num_frames(), upright.num_frames());
+  EXPECT_EQ(upright.frames.col(4).cwiseAbs().maxCoeff(), 0.0);
+  // The default range [-10, 40] is used and respected; a configured one too.
+  EXPECT_GT(tilted.frames.col(4).maxCoeff(), 25.0);
+  EXPECT_LT(tilted.frames.col(4).minCoeff(), -3.0);
+  EXPECT_LE(tilted.frames.col(4).maxCoeff(), 40.0 + 1e-9);
+  EXPECT_GE(tilted.frames.col(4).minCoeff(), -10.0 - 1e-9);
+  EXPECT_LE(narrow.frames.col(4).maxCoeff(), 20.0 + 1e-9);
+  EXPECT_GE(narrow.frames.col(4).minCoeff(), -5.0 - 1e-9);
+  const char* legs[] = {"left_hip", "left_knee", "left_toe_end", "right_hip", "right_ankle", "right_toe_end"};
+  const int head = tilted.joint_index("head_end");
+  double leg_moved = 0, forward = 0;
+  for (int f = 0; f < tilted.num_frames(); ++f) {
+    const BvhTransforms a = bvh_global_transforms(tilted, f), b = bvh_global_transforms(upright, f);
+    for (const char* j : legs) {
+      const int i = tilted.joint_index(j);
+      leg_moved = std::max(leg_moved, (a[i].translation() - b[i].translation()).norm());
+    }
+    if (tilted.frames(f, 4) > 30) {
+      // Forward: along the heading, the pelvis's z axis turned by the yaw only.
+      const double yaw = tilted.frames(f, 3) * M_PI / 180;
+      const Eigen::Vector3d heading(std::sin(yaw), 0, std::cos(yaw));
+      forward = std::max(forward, (a[head].translation() - b[head].translation()).dot(heading));
+      EXPECT_LT(a[head].translation().y(), b[head].translation().y()) << "frame " << f;
+    }
+  }
+  EXPECT_LT(leg_moved, 1e-9) << "m: the legs do not move";
+  EXPECT_GT(forward, 0.2) << "m: the head goes forward with a tilt above 30°";
+}
+
 TEST(RandomMotion, StrictYaml) {
+  expect_error([] { parse_motion_spec("segments:\n  - type: random\n    duration: 5\n    pelvis: {pitch: [30, -10]}\n", "r.yaml"); },
+               {"r.yaml:4:", "segments[0].pelvis.pitch", "min > max"});
+  expect_error([] { parse_motion_spec("segments:\n  - type: random\n    duration: 5\n    pelvis: {roll: [-5, 5]}\n", "r.yaml"); },
+               {"r.yaml:4:", "segments[0].pelvis.roll", "unknown key"});
   expect_error([] { parse_motion_spec("segments:\n  - {type: random, duration: 5, speed: 2}\n", "/x/r.yaml"); },
                {"r.yaml:2:", "segments[0].speed", "unknown key"});
   expect_error([] { parse_motion_spec("segments:\n  - type: random\n    duration: 5\n    turn: {probability: 0.5, rate: 3}\n", "r.yaml"); },
