@@ -153,12 +153,12 @@ const std::vector<FrameMetric>& frame_metrics() {
       {"cloth_error_mean_mm", "mm", "mean cloth vertex distance", &M::cloth_error_mean_mm},
       {"cloth_error_p95_mm", "mm", "95th percentile of the cloth vertex distances", &M::cloth_error_p95_mm},
       {"cloth_chamfer_mm", "mm", "symmetric Chamfer distance of the cloth surfaces", &M::cloth_chamfer_mm},
-      {"penetration_mean_mm", "mm", "depth of cloth vertices inside the body, mean over those inside",
+      {"penetration_mean_mm", "mm", "depth of free cloth vertices (not anchors) inside the body, mean over those inside",
        &M::penetration_mean_mm},
-      {"penetration_mean_all_mm", "mm", "the same depth, mean over every cloth vertex (0 outside)",
+      {"penetration_mean_all_mm", "mm", "the same depth, mean over every free cloth vertex (0 outside)",
        &M::penetration_mean_all_mm},
-      {"penetration_max_mm", "mm", "the deepest cloth vertex", &M::penetration_max_mm},
-      {"penetrating_fraction", "", "the fraction of cloth vertices inside the body", &M::penetrating_fraction},
+      {"penetration_max_mm", "mm", "the deepest free cloth vertex", &M::penetration_max_mm},
+      {"penetrating_fraction", "", "the fraction of free cloth vertices inside the body", &M::penetrating_fraction},
       {"oob_force_mean_n", "N", "out-of-balance force, mean over the free vertices", &M::oob_force_mean_n},
       {"oob_force_p95_n", "N", "its 95th percentile", &M::oob_force_p95_n},
       {"oob_force_p99_n", "N", "its 99th percentile", &M::oob_force_p99_n},
@@ -206,7 +206,22 @@ double mean_of(const std::vector<double>& v) {
 
 }  // namespace
 
-void measure_penetration(const Character& ch, const Vertices& body, const Vertices& cloth, FrameMeasures& m) {
+Vertices free_cloth_vertices(const Character& ch, const Vertices& cloth) {
+  std::vector<char> held(size_t(cloth.rows()), 0);
+  for (int i = 0; i < ch.attachment.size(); ++i) {
+    const int a = ch.attachment.anchors[i];
+    WEFT_CHECK(a >= 0 && a < cloth.rows(), "free_cloth_vertices: anchor ", a, " of a garment with ", cloth.rows(),
+               " vertices");
+    held[size_t(a)] = 1;
+  }
+  Vertices free(cloth.rows() - std::count(held.begin(), held.end(), 1), 3);
+  for (int i = 0, k = 0; i < cloth.rows(); ++i)
+    if (!held[size_t(i)]) free.row(k++) = cloth.row(i);
+  return free;
+}
+
+void measure_penetration(const Character& ch, const Vertices& body, const Vertices& all_cloth, FrameMeasures& m) {
+  const Vertices cloth = free_cloth_vertices(ch, all_cloth);
   const Penetration p = cloth_penetration(ch, body, cloth);
   m.cloth_vertices = cloth.rows();
   m.penetrating_vertices = p.vertices_inside;

@@ -9,8 +9,10 @@
 // known-answer case. The measures:
 // - vertex distance to the ground truth (mm) and the joint error over the mapped BODY_25
 //   keypoints (MPJPE, mm);
-// - penetration of cloth vertices into the body's active faces (those the simulator
-//   collides with; capture/garment/garment_simulator.h body_obstacle);
+// - penetration of the free cloth vertices into the body's active faces (those the
+//   simulator collides with; capture/garment/garment_simulator.h body_obstacle); the
+//   anchors are left out, as in the force: they are tied to the body's surface, so half of
+//   them lie a fraction of a millimetre inside it whatever the garment does;
 // - out-of-balance force m·a − (f_int + f_ext + f_coll) of the newest of three
 //   consecutive frames (physics/cloth_metrics.h), a from their centred difference, with
 //   the garment simulator of a synth config's simulation section: the predicted body of
@@ -48,6 +50,8 @@ double quantile(std::vector<double> values, double q);
 // NaN when none is.
 double mean_joint_error_mm(const Vertices& predicted_body25, const Vertices& true_body25, double metres_per_unit);
 
+// The garment's vertices not held by the attachment (its anchors), in order.
+Vertices free_cloth_vertices(const Character& character, const Vertices& cloth);
 // Cloth vertices inside the body (depths in metres).
 Penetration cloth_penetration(const Character& character, const Vertices& body, const Vertices& cloth);
 // Signed distance (mm) of each cloth vertex to the body's active faces: < 0 inside.

@@ -632,10 +632,10 @@ ValidationReport Trainer::validate(const SyntheticDataset& split, int samples) {
       });
       for (double x : ious) iou_sum += x, ++iou_n;
       if (p.cloth.defined()) {
-        const Penetration pen =
-            body_penetration(body_obstacle(character_, Eigen::MatrixX3d(body * mpu)), to_positions(cloth, mpu));
-        pen_sum += pen.depth_sum * 1000, pen_n += pen.vertices_inside, cloth_n += cloth.rows();
-        rep.penetration_max_mm = std::max(rep.penetration_max_mm, pen.max_depth * 1000);
+        FrameMeasures pen;  // the free vertices', as every evaluation measures them
+        measure_penetration(character_, body, cloth, pen);
+        pen_sum += pen.penetration_depth_sum_mm, pen_n += pen.penetrating_vertices, cloth_n += pen.cloth_vertices;
+        rep.penetration_max_mm = std::max(rep.penetration_max_mm, pen.penetration_max_mm);
       }
     }
   }

@@ -202,6 +202,19 @@ std::vector<MetricCase> metric_cases() {
                  const FrameMeasures m = one_vertex_inside();
                  EXPECT_DOUBLE_EQ(m.penetrating_fraction, 1.0 / 25);
                  EXPECT_EQ(m.penetrating_vertices, 1);
+                 // An anchor inside is the attachment's, not the garment's: left out, and
+                 // the fraction is over the 24 free vertices.
+                 Character held = far_apart();
+                 held.attachment.anchors = Eigen::VectorXi::Constant(1, 12);
+                 const PosedFrame t = truth_of(held);
+                 PosedFrame p = t;
+                 p.cloth.row(12) = Eigen::RowVector3d(0, 1, 0);  // the sphere's centre
+                 p.cloth.row(0) += Eigen::RowVector3d(0, 0, 0.001);
+                 FrameMeasures a;
+                 measure_geometry(held, p, t, true, a);
+                 EXPECT_EQ(a.penetrating_vertices, 0);
+                 EXPECT_EQ(a.cloth_vertices, 24);
+                 EXPECT_EQ(a.penetration_mean_all_mm, 0.0);
                }});
   // Held still in the air, out of contact, nothing pinned: every vertex is out of balance
   // by its weight. Dropped from rest (x = x0 + g t²/2): in balance, inertia = weight.
