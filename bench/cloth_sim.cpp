@@ -8,7 +8,9 @@
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1),
-// precondition_exact_hessian (0/1), negative_curvature_search (0/1), max_iterations (per
+// precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
+// (0/1), factor_without_weak_pairs (0/1), CHOLMOD's supernode
+// amalgamation nrelax=A,B,C and zrelax=A,B,C, max_iterations (per
 // step; 1 = one linear solve per step, as a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
 // youngs_modulus (Pa), collision_stiffness (N/m), collision_thickness (m), the membrane
@@ -135,6 +137,12 @@ int main(int argc_all, char** argv_all) {
     else if (key == "negative_curvature_search")
       s.newton.negative_curvature_search = value != "0";
     else if (key == "max_iterations") s.newton.max_iterations = std::atoi(value.c_str());
+    else if (key == "per_vertex_step_limits") s.newton.per_vertex_step_limits = value != "0";
+    else if (key == "factor_without_weak_pairs") s.newton.factor_without_weak_pairs = value != "0";
+    else if (key == "nrelax" || key == "zrelax") {  // three comma-separated numbers
+      double* out = key == "nrelax" ? s.newton.amalgamation.nrelax : s.newton.amalgamation.zrelax;
+      std::sscanf(value.c_str(), "%lf,%lf,%lf", &out[0], &out[1], &out[2]);
+    }
     else if (key == "bending_stiffness") s.material.bending_stiffness = std::atof(value.c_str());
     else if (key == "youngs_modulus") s.material.youngs_modulus = std::atof(value.c_str());
     else if (key == "collision_stiffness") s.collision_stiffness = std::atof(value.c_str());

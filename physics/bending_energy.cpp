@@ -61,6 +61,10 @@ void BendingEnergy::add_pattern(std::vector<std::array<int, 2>>& pairs) const {
       for (int b = a + 1; b < 4; ++b) pairs.push_back({el.v[a], el.v[b]});
 }
 
+void BendingEnergy::add_weak_pairs(std::vector<std::array<int, 2>>& pairs) const {
+  for (const auto& el : elements_) pairs.push_back({el.v[2], el.v[3]});
+}
+
 double BendingEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
                                SparseHessian* H) const {
   using J = Jet2<9>;

@@ -22,6 +22,8 @@ class BendingEnergy : public Energy {
   std::string name() const override { return "bending"; }
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const override;
   void add_pattern(std::vector<std::array<int, 2>>& pairs) const override;
+  // The two vertices opposite across each hinge (they share no triangle).
+  void add_weak_pairs(std::vector<std::array<int, 2>>& pairs) const override;
 
  private:
   struct Element {

@@ -62,7 +62,7 @@ struct CholmodSolver::State {
 };
 
 CholmodSolver::CholmodSolver(const SparseHessian& pattern, CholeskyKind kind,
-                             CholeskyOrdering ordering)
+                             CholeskyOrdering ordering, SupernodeAmalgamation amalgamation)
     : s_(std::make_unique<State>()) {
   use_one_blas_thread();
   const CallingThreadOnly serial;
@@ -75,6 +75,10 @@ CholmodSolver::CholmodSolver(const SparseHessian& pattern, CholeskyKind kind,
                                   : ordering == CholeskyOrdering::metis           ? CHOLMOD_METIS
                                                                                   : CHOLMOD_AMD;
   s_->common.postorder = 1;
+  for (int k = 0; k < 3; ++k) {
+    s_->common.nrelax[k] = static_cast<size_t>(amalgamation.nrelax[k]);
+    s_->common.zrelax[k] = amalgamation.zrelax[k];
+  }
   // LLᵀ also in the simplicial case: an LDLᵀ factorisation succeeds on indefinite
   // matrices, and the Newton solver relies on failure to detect them.
   s_->common.final_ll = 1;

@@ -17,6 +17,17 @@ enum class CholeskyOrdering {
   metis,              // METIS's nested dissection
 };
 
+// CHOLMOD's relaxed amalgamation: a supernode is merged with its parent while the merged
+// one has fewer than nrelax[0] columns, or fewer than nrelax[1] (nrelax[2]) columns and
+// at most a fraction zrelax[0] (zrelax[1], zrelax[2]) of explicit zeros. CHOLMOD's own
+// defaults are {4, 16, 48} and {0.8, 0.1, 0.05}. Debian's CHOLMOD opens an OpenMP region
+// (with a futex wake at its barrier even on one thread) per supernode, so on cloth
+// meshes fewer, wider supernodes are cheaper (docs/BENCHMARKS.md).
+struct SupernodeAmalgamation {
+  double nrelax[3] = {16, 64, 256};
+  double zrelax[3] = {0.8, 0.2, 0.1};
+};
+
 class CholmodSolver {
  public:
   // Every CHOLMOD call runs on the calling thread only (CHOLMOD's own OpenMP teams are
@@ -25,7 +36,8 @@ class CholmodSolver {
   // simulators built in parallel get the same ordering as one built alone.
   explicit CholmodSolver(const SparseHessian& pattern,
                          CholeskyKind kind = CholeskyKind::automatic,
-                         CholeskyOrdering ordering = CholeskyOrdering::amd);
+                         CholeskyOrdering ordering = CholeskyOrdering::amd,
+                         SupernodeAmalgamation amalgamation = {});
   ~CholmodSolver();
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;

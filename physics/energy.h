@@ -21,6 +21,10 @@ class Energy {
                           SparseHessian* hessian) const = 0;
   // Vertex pairs this energy couples (off-diagonal blocks of its Hessian).
   virtual void add_pattern(std::vector<std::array<int, 2>>& pairs) const { (void)pairs; }
+  // Of those, the pairs coupled only weakly and by nothing else (the vertices opposite
+  // across a bending hinge), which a preconditioner may drop
+  // (NewtonOptions::factor_without_weak_pairs).
+  virtual void add_weak_pairs(std::vector<std::array<int, 2>>& pairs) const { (void)pairs; }
   // Adds a PSD matrix C such that the energy's exact Hessian plus C is PSD, for energies
   // whose exact Hessian (projection off) can be indefinite; returns false if it added
   // nothing (no correction, or none needed at x). The Newton solver factorises the

@@ -1,5 +1,6 @@
 #include "physics/newton_solver.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -35,7 +36,21 @@ NewtonSolver::NewtonSolver(int num_vertices, std::vector<Energy*> energies, Newt
   hessian_ = SparseHessian(n_, pairs);
   exact_hessian_ = hessian_;
   inv_force_scale_ = Eigen::VectorXd::Ones(n_);
-  cholmod_ = std::make_unique<CholmodSolver>(hessian_, options_.cholesky, options_.ordering);
+  if (options_.factor_without_weak_pairs) {
+    WEFT_CHECK(options_.linear_solver == LinearSolverKind::direct,
+               "newton: factor_without_weak_pairs needs the direct linear solver");
+    std::vector<std::array<int, 2>> weak;
+    for (const Energy* e : energies_) e->add_weak_pairs(weak);
+    auto ordered = [](std::array<int, 2> p) { return p[0] < p[1] ? p : std::array<int, 2>{p[1], p[0]}; };
+    for (auto& p : weak) p = ordered(p);
+    std::sort(weak.begin(), weak.end());
+    std::vector<std::array<int, 2>> strong;
+    for (const auto& p : pairs)
+      if (!std::binary_search(weak.begin(), weak.end(), ordered(p))) strong.push_back(p);
+    coarse_ = SparseHessian(n_, strong);
+  }
+  cholmod_ = std::make_unique<CholmodSolver>(coarse_.num_vertices() > 0 ? coarse_ : hessian_,
+                                             options_.cholesky, options_.ordering, options_.amalgamation);
 }
 
 void NewtonSolver::set_force_scale(Eigen::VectorXd f) {
@@ -109,13 +124,13 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
   return CgOutcome::too_slow;
 }
 
-void NewtonSolver::exact_direction(const Eigen::VectorXd& g, Eigen::VectorXd& d,
+void NewtonSolver::exact_direction(const SparseHessian& H, const Eigen::VectorXd& g, Eigen::VectorXd& d,
                                    NewtonReport& report) {
-  // Truncated CG on the exact (H_exact + δI) d = −g, preconditioned by the factor of the
-  // corrected H + δI. If the very first direction has non-positive curvature, the
-  // preconditioned step (the corrected Newton direction) is used.
+  // Truncated CG on (H + δI) d = −g (H the exact Hessian), preconditioned by the factor
+  // of the corrected H + δI or of its bound without the weak pairs. If the very first
+  // direction has non-positive curvature, the preconditioned step is used.
   const int before = report.cg_iterations;
-  last_cg_outcome_ = preconditioned_cg(exact_hessian_, g, d, report);
+  last_cg_outcome_ = preconditioned_cg(H, g, d, report);
   if (report.cg_iterations == before) d = cholmod_->solve(-g);
 }
 
@@ -153,13 +168,23 @@ bool NewtonSolver::direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
       exact_hessian_.values() = hessian_.values();
       exact_differs_ = correct_hessian(x, report);
     }
-    hessian_.add_to_diagonal(delta_);
-    const bool factored = cholmod_->factorize(hessian_);
-    hessian_.add_to_diagonal(-delta_);
+    const bool coarse = coarse_.num_vertices() > 0;
+    bool factored;
+    if (coarse) {
+      hessian_.bound_into(coarse_);
+      coarse_.add_to_diagonal(delta_);
+      factored = cholmod_->factorize(coarse_);
+    } else {
+      hessian_.add_to_diagonal(delta_);
+      factored = cholmod_->factorize(hessian_);
+      hessian_.add_to_diagonal(-delta_);
+    }
     ++report.factorizations;
     if (factored) {
       if (exact_differs_)
-        exact_direction(g, d, report);
+        exact_direction(exact_hessian_, g, d, report);
+      else if (coarse)
+        exact_direction(hessian_, g, d, report);
       else
         d = -cholmod_->solve(g);
       factor_stale_ = false;

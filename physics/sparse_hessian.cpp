@@ -1,6 +1,7 @@
 #include "physics/sparse_hessian.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "graph/error.h"
 
@@ -49,6 +50,46 @@ int SparseHessian::block_position(int i, int j) const {
   WEFT_CHECK(it != end && *it == i, "sparse hessian: block (", i, ", ", j,
              ") is not in the pattern");
   return static_cast<int>(it - begin);
+}
+
+int SparseHessian::find_block(int i, int j) const {
+  const int* begin = upper_.data() + upper_start_[j];
+  const int* end = upper_.data() + upper_start_[j + 1];
+  const int* it = std::lower_bound(begin, end, i);
+  return it != end && *it == i ? static_cast<int>(it - begin) : -1;
+}
+
+void SparseHessian::bound_into(SparseHessian& coarse) const {
+  WEFT_CHECK(coarse.num_vertices_ == num_vertices_, "sparse hessian: bound of ", num_vertices_,
+             " vertices into ", coarse.num_vertices_);
+  coarse.set_zero();
+  // Two passes: a diagonal block is copied over, so the bounds are added after all copies.
+  std::vector<std::array<double, 2>> bounds;  // (vertex, ‖B‖_F) per dropped block end
+  for (int j = 0; j < num_vertices_; ++j) {
+    for (int k = upper_start_[j]; k < upper_start_[j + 1]; ++k) {
+      const int i = upper_[k];
+      const int kc = coarse.find_block(i, j);
+      const int local = k - upper_start_[j];
+      if (kc >= 0) {
+        for (int b = 0; b < 3; ++b) {
+          const double* src = values_.data() + col_start_[3 * j + b] + 3 * local;
+          double* dst = coarse.values_.data() + coarse.col_start_[3 * j + b] + 3 * kc;
+          const int rows = i == j ? b + 1 : 3;
+          for (int a = 0; a < rows; ++a) dst[a] = src[a];
+        }
+        continue;
+      }
+      double norm2 = 0;
+      for (int b = 0; b < 3; ++b) {
+        const double* src = values_.data() + col_start_[3 * j + b] + 3 * local;
+        for (int a = 0; a < 3; ++a) norm2 += src[a] * src[a];
+      }
+      bounds.push_back({static_cast<double>(i), std::sqrt(norm2)});
+      bounds.push_back({static_cast<double>(j), std::sqrt(norm2)});
+    }
+  }
+  for (const auto& [v, bound] : bounds)
+    for (int a = 0; a < 3; ++a) coarse.values_[coarse.diag_index_[3 * static_cast<int>(v) + a]] += bound;
 }
 
 // Adds the 3×3 block of `h` at (row0, col0) (leading dimension ld) to block (i, j), i <= j.

@@ -33,6 +33,11 @@ class SparseHessian {
   void add_to_diagonal(double delta);          // += delta · I
   void add_to_diagonal(const Eigen::VectorXd& d);  // += diag(d), d of size 3n
 
+  // Writes into `coarse` (a pattern that is a subset of this one) an upper bound of this
+  // matrix in the Loewner order: the blocks both patterns hold are copied, and each
+  // block B_ij that `coarse` lacks is dropped with ‖B_ij‖_F·I added to the diagonal
+  // blocks of i and j (the dropped part [0 B; Bᵀ 0] is below diag(‖B‖I, ‖B‖I)).
+  void bound_into(SparseHessian& coarse) const;
   // y = H x using both triangles.
   Eigen::VectorXd multiply(const Eigen::VectorXd& x) const;
   // The full symmetric matrix, for tests and small problems.
@@ -45,6 +50,7 @@ class SparseHessian {
 
  private:
   int block_position(int i, int j) const;  // index of i in the upper neighbours of j (i <= j)
+  int find_block(int i, int j) const;      // the same, or −1 if (i, j) is not in the pattern
   void add_block(int i, int j, const double* h, int ld, int row0, int col0);
 
   int num_vertices_ = 0;

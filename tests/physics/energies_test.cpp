@@ -630,5 +630,45 @@ TEST(SparseHessian, MultiplyMatchesFullMatrix) {
   EXPECT_LT((h.multiply(v) - h.to_full() * v).norm(), 1e-9 * v.norm());
 }
 
+// The preconditioner's bound (NewtonOptions::factor_without_weak_pairs): on the pattern
+// without the hinges' cross pairs, the blocks both patterns hold are the Hessian's own,
+// and the matrix bounds the Hessian from above (their difference is PSD), so its factor
+// is positive definite whenever the Hessian is.
+TEST(SparseHessian, BoundWithoutTheWeakPairsIsAnUpperBound) {
+  const ClothMesh mesh = small_grid();
+  ClothMaterial m = material();
+  m.bending_stiffness = 1e-2;  // a hinge coupling far from negligible
+  BendingEnergy bending(mesh, m);
+  MembraneEnergy membrane(mesh, m);
+  std::vector<std::array<int, 2>> pairs, weak, strong;
+  bending.add_pattern(pairs);
+  membrane.add_pattern(pairs);
+  bending.add_weak_pairs(weak);
+  ASSERT_EQ(weak.size(), mesh.hinges.size());
+  for (const auto& p : pairs) {
+    const bool is_weak = std::any_of(weak.begin(), weak.end(), [&](const auto& w) {
+      return (w[0] == p[0] && w[1] == p[1]) || (w[0] == p[1] && w[1] == p[0]);
+    });
+    if (!is_weak) strong.push_back(p);
+  }
+  SparseHessian h(mesh.num_vertices(), pairs), coarse(mesh.num_vertices(), strong);
+  const Eigen::VectorXd x = perturbed(mesh.rest, 1.05, 0.02, 21);
+  bending.evaluate(x, nullptr, &h);
+  membrane.evaluate(x, nullptr, &h);
+  h.bound_into(coarse);
+  const Eigen::MatrixXd H = h.to_full(), C = coarse.to_full();
+  int dropped = 0;
+  for (int i = 0; i < mesh.num_vertices(); ++i)
+    for (int j = 0; j < mesh.num_vertices(); ++j) {
+      if (i == j) continue;
+      const Eigen::Matrix3d hb = H.block<3, 3>(3 * i, 3 * j), cb = C.block<3, 3>(3 * i, 3 * j);
+      if (cb.norm() == 0 && hb.norm() > 0) ++dropped;
+      else EXPECT_LT((hb - cb).norm(), 1e-12 * (1 + hb.norm())) << i << ", " << j;
+    }
+  EXPECT_GT(dropped, 0);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C - H);
+  EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-9 * H.norm());
+}
+
 }  // namespace
 }  // namespace weft::physics
