@@ -67,15 +67,25 @@ struct Start {
   ClothPerturbation drawn;
 };
 
-// Window `id`: its start frame t in [1, frames − window − 1] (so t − 1 and the window's
-// last frame exist) and its perturbation, both from (seed, id) alone.
+// The clip (dataset.yaml segments) a frame belongs to: 0 for a one-clip dataset.
+int clip_of(const GarmentSequence& s, int frame) {
+  return static_cast<int>(std::upper_bound(s.segments.begin(), s.segments.end(), frame) - s.segments.begin());
+}
+
+// Window `id`: its start frame t, drawn among the frames whose t − 1 and the window's last
+// frame t + window exist and lie in t's clip (a window does not run across the cut between
+// two motions), and its perturbation, both from (seed, id) alone.
 Start make_start(const GarmentSequence& s, const physics::Positions& rest, int id, int frames, uint64_t seed) {
   PortableRandom rng(mix_seed(seed, static_cast<uint64_t>(id), 1));
-  const int span = s.frames - frames - 1;
-  WEFT_CHECK(span >= 1, s.dir, ": ", s.frames, " frames are too few for windows of ", frames, " frames");
+  std::vector<int> starts;
+  for (int t = 1; t + frames < s.frames; ++t)
+    if (clip_of(s, t - 1) == clip_of(s, t + frames)) starts.push_back(t);
+  WEFT_CHECK(!starts.empty(), s.dir, ": no clip of ", s.frames, " frames holds a window of ", frames,
+             " frames and the frame before it");
   Start st;
   st.id = id;
-  st.frame = 1 + std::min(span - 1, static_cast<int>(rng.uniform() * span));
+  const int span = static_cast<int>(starts.size());
+  st.frame = starts[std::min(span - 1, static_cast<int>(rng.uniform() * span))];
   const physics::BodyMesh body = collision_body(s, st.frame);
   PerturbedStart p = perturb_start(s.cloth[st.frame - 1], s.cloth[st.frame], rest, body, s.time_step(), {},
                                    mix_seed(seed, static_cast<uint64_t>(id), 2));
@@ -100,7 +110,7 @@ bool all_finite(const std::vector<physics::StepResult>& r) {
 
 }  // namespace
 
-int main(int argc_all, char** argv_all) {
+static int run(int argc_all, char** argv_all) {
   std::vector<char*> positional;
   std::map<std::string, std::string> named;
   for (int k = 0; k < argc_all; ++k) {
@@ -231,4 +241,15 @@ int main(int argc_all, char** argv_all) {
       median(window_ms), median(window_cpu_ms), median(build_ms), median(iterations), batch_windows, threads,
       median(batch_ms), median(batch_cpu_ms), batch_failures, load_average());
   return 0;
+}
+
+// A bad dataset or window (a weft::Error naming the file and what was expected) ends the
+// benchmark with its message, not an abort.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const weft::Error& e) {
+    std::fprintf(stderr, "bench_simulation_windows: %s\n", e.what());
+    return 1;
+  }
 }
