@@ -9,7 +9,8 @@
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
-// (0/1), factor_without_weak_pairs (0/1), CHOLMOD's supernode
+// (0/1), smooth_creases (0/1: the body's concave creases, as weft synth's default),
+// factor_without_weak_pairs (0/1), CHOLMOD's supernode
 // amalgamation nrelax=A,B,C and zrelax=A,B,C, max_iterations (per
 // step; 1 = one linear solve per step, as a linearised implicit Euler like ARCSim's);
 // and, to find what the iteration count depends on, the scene's bending_stiffness (N·m),
@@ -138,6 +139,7 @@ int main(int argc_all, char** argv_all) {
       s.newton.negative_curvature_search = value != "0";
     else if (key == "max_iterations") s.newton.max_iterations = std::atoi(value.c_str());
     else if (key == "per_vertex_step_limits") s.newton.per_vertex_step_limits = value != "0";
+    else if (key == "smooth_creases") s.collision_smooth_creases = value != "0";
     else if (key == "factor_without_weak_pairs") s.newton.factor_without_weak_pairs = value != "0";
     else if (key == "nrelax" || key == "zrelax") {  // three comma-separated numbers
       double* out = key == "nrelax" ? s.newton.amalgamation.nrelax : s.newton.amalgamation.zrelax;
