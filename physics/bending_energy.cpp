@@ -1,6 +1,7 @@
 #include "physics/bending_energy.h"
 
 #include <Eigen/Geometry>
+#include <cmath>
 
 #include "physics/second_order_jet.h"
 
@@ -85,28 +86,26 @@ double BendingEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
       continue;
     }
     if (!H || project_hessian_) {
-      // A first-order jet is an order of magnitude cheaper than the second-order one. With
-      // the projection on, the Hessian is the Gauss-Newton term 2w ∇θ∇θᵀ: PSD by
-      // construction (no eigen-decomposition), and it differs from the exact Hessian
-      // only by 2w (θ − θ̄) ∇²θ, small while the hinge is near its rest angle.
-      using J1 = Jet2<9, false>;
-      using JV1 = std::array<J1, 3>;
-      JV1 ja, jb, jc;
-      for (int k = 0; k < 3; ++k) {
-        ja[k] = J1::variable(a[k], k);
-        jb[k] = J1::variable(b[k], 3 + k);
-        jc[k] = J1::variable(c[k], 6 + k);
-      }
-      const J1 theta = angle_from_edges<J1, JV1>(ja, jb, jc);
-      const double d = theta.v - el.rest_angle;
+      // The gradient in closed form: a wing vertex moves θ at 1/h along its triangle's
+      // normal (h its distance from the hinge edge, |n|/|a|), and the edge's end points
+      // take each wing's share by where the wing projects onto the edge (s = b·a/|a|²,
+      // c·a/|a|²), so the four sum to zero. Checked against a first-order jet (1e-15) and
+      // by the gradient checks; several times cheaper. With the projection on, the
+      // Hessian is the Gauss-Newton term 2w ∇θ∇θᵀ: PSD by construction, and it differs
+      // from the exact Hessian only by 2w (θ − θ̄) ∇²θ, small while the hinge is near its
+      // rest angle.
+      const double a2 = a.squaredNorm(), a_len = std::sqrt(a2);
+      const double theta = std::atan2(n1.cross(n2).dot(a) / a_len, n1.dot(n2));
+      const Vec3 g2 = (-a_len / n1.squaredNorm()) * n1;
+      const Vec3 g3 = (-a_len / n2.squaredNorm()) * n2;
+      const double s2 = b.dot(a) / a2, s3 = c.dot(a) / a2;
+      Eigen::Matrix<double, 12, 1> gx;  // ∇θ over (x0, x1, x2, x3)
+      gx << -(1 - s2) * g2 - (1 - s3) * g3, -s2 * g2 - s3 * g3, g2, g3;
+      const double d = theta - el.rest_angle;
       energy += el.weight * d * d;
-      if (g) add_edge_gradient(el, 2.0 * el.weight * d * theta.g, *g);
+      if (g)
+        for (int k = 0; k < 4; ++k) g->segment<3>(3 * el.v[k]) += (2.0 * el.weight * d) * gx.segment<3>(3 * k);
       if (H) {
-        // In vertex coordinates ∇θ = (−Σ_k ∇_k, ∇_a, ∇_b, ∇_c): the Hessian is the outer
-        // product of that 12-vector.
-        Eigen::Matrix<double, 12, 1> gx;
-        gx.segment<9>(3) = theta.g;
-        gx.head<3>() = -(theta.g.segment<3>(0) + theta.g.segment<3>(3) + theta.g.segment<3>(6));
         const Eigen::Matrix<double, 12, 12> hx = (2.0 * el.weight) * gx * gx.transpose();
         H->add<4>(el.v, hx);
       }
