@@ -151,31 +151,32 @@ Mat32 MembraneEnergy::deformation_gradient(const Element& el, const Eigen::Vecto
 Eigen::Matrix<double, 9, 9> MembraneEnergy::element_hessian(const Element& el, const Mat32& F,
                                                              const Eigen::Matrix2d& S,
                                                              const Eigen::Matrix3d& tangent) const {
-  // d²ψ/dF²[dF] = dF S + F dS, dS = C[dG]. The second part is PSD whenever the tangent
-  // C is (⟨dF, F dS⟩ = dγᵀ C dγ); the geometric term dF S is indefinite where S has a
-  // compressive (negative) eigenvalue. Linear in (S, C).
-  Eigen::Matrix<double, 6, 6> hf;
-  for (int k = 0; k < 6; ++k) {
-    Mat32 dF = Mat32::Zero();
-    dF(k % 3, k / 3) = 1.0;
-    const Eigen::Matrix2d FtdF = F.transpose() * dF;
-    const Eigen::Matrix2d dG = 0.5 * (FtdF + FtdF.transpose());
-    const Eigen::Vector3d ds = tangent * Eigen::Vector3d(dG(0, 0), dG(1, 1), dG(0, 1));
-    Eigen::Matrix2d dS;
-    dS << ds[0], 0.5 * ds[2], 0.5 * ds[2], ds[1];
-    const Mat32 dP = dF * S + F * dS;
-    hf.col(k) = Eigen::Map<const Eigen::Matrix<double, 6, 1>>(dP.data());
+  // d²ψ/dF²[dF] = dF S + F dS, dS = C[dG]: over vec(F) = (f₀, f₁) (F's columns),
+  //   H_F = S ⊗ I₃ + Lᵀ C L,  L = [f₀ᵀ 0; 0 f₁ᵀ; ½f₁ᵀ ½f₀ᵀ]  (dγ = L vec(dF), γ = (G₀₀, G₁₁, G₀₁)).
+  // The second part is PSD whenever the tangent C is; the geometric term S ⊗ I₃ is
+  // indefinite where S has a compressive (negative) eigenvalue. Linear in (S, C). With
+  // F = Σ_v x_v β_vᵀ, the vertex Hessian is w (β ⊗ I₃) H_F (β ⊗ I₃)ᵀ.
+  Eigen::Matrix<double, 3, 6> L = Eigen::Matrix<double, 3, 6>::Zero();
+  L.block<1, 3>(0, 0) = F.col(0).transpose();
+  L.block<1, 3>(1, 3) = F.col(1).transpose();
+  L.block<1, 3>(2, 0) = 0.5 * F.col(1).transpose();
+  L.block<1, 3>(2, 3) = 0.5 * F.col(0).transpose();
+  const Eigen::Matrix3d C = 0.5 * (tangent + tangent.transpose());
+  const Eigen::Matrix<double, 3, 6> CL = C.lazyProduct(L);
+  Eigen::Matrix<double, 6, 6> hf = L.transpose().lazyProduct(CL);
+  const double s01 = 0.5 * (S(0, 1) + S(1, 0));
+  for (int i = 0; i < 3; ++i) {
+    hf(i, i) += S(0, 0);
+    hf(3 + i, 3 + i) += S(1, 1);
+    hf(i, 3 + i) += s01;
+    hf(3 + i, i) += s01;
   }
-  hf = 0.5 * (hf + hf.transpose()).eval();
-  Eigen::Matrix<double, 9, 9> hx;
+  Eigen::Matrix<double, 9, 6> K = Eigen::Matrix<double, 9, 6>::Zero();
   for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) {
-      Eigen::Matrix3d blk = Eigen::Matrix3d::Zero();
-      for (int c = 0; c < 2; ++c)
-        for (int d = 0; d < 2; ++d) blk += el.beta(a, c) * el.beta(b, d) * hf.block<3, 3>(3 * c, 3 * d);
-      hx.block<3, 3>(3 * a, 3 * b) = el.weight * blk;
-    }
-  return hx;
+    for (int c = 0; c < 2; ++c) K.block<3, 3>(3 * a, 3 * c).diagonal().setConstant(el.beta(a, c));
+  // Coefficient-based products: Eigen would run these fixed sizes through its GEMM kernel.
+  const Eigen::Matrix<double, 9, 6> Khf = K.lazyProduct(hf);
+  return el.weight * Khf.lazyProduct(K.transpose());
 }
 
 namespace {
