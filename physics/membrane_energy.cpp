@@ -171,12 +171,16 @@ Eigen::Matrix<double, 9, 9> MembraneEnergy::element_hessian(const Element& el, c
     hf(i, 3 + i) += s01;
     hf(3 + i, i) += s01;
   }
-  Eigen::Matrix<double, 9, 6> K = Eigen::Matrix<double, 9, 6>::Zero();
+  // Block (a, b) = w Σ_cd β_ac β_bd H_F,cd, in two passes over 3×3 blocks: T_cb = Σ_d β_bd H_F,cd.
+  Eigen::Matrix3d T[2][3];
+  for (int c = 0; c < 2; ++c)
+    for (int b = 0; b < 3; ++b)
+      T[c][b] = el.beta(b, 0) * hf.block<3, 3>(3 * c, 0) + el.beta(b, 1) * hf.block<3, 3>(3 * c, 3);
+  Eigen::Matrix<double, 9, 9> hx;
   for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 2; ++c) K.block<3, 3>(3 * a, 3 * c).diagonal().setConstant(el.beta(a, c));
-  // Coefficient-based products: Eigen would run these fixed sizes through its GEMM kernel.
-  const Eigen::Matrix<double, 9, 6> Khf = K.lazyProduct(hf);
-  return el.weight * Khf.lazyProduct(K.transpose());
+    for (int b = 0; b < 3; ++b)
+      hx.block<3, 3>(3 * a, 3 * b) = el.weight * (el.beta(a, 0) * T[0][b] + el.beta(a, 1) * T[1][b]);
+  return hx;
 }
 
 namespace {
