@@ -335,13 +335,20 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     report.residual = g.allFinite() ? residual(g) : NAN;
     report.regularization = delta_;
     report.total_ms = ms_since(t_start);
+    if (std::isfinite(report.residual) &&  // the returned iterate's, if not recorded yet
+        report.residual_history.size() < static_cast<size_t>(report.iterations) + 1) {
+      report.residual_history.push_back(report.residual);
+      report.residual_ms.push_back(report.total_ms);
+    }
     return report;
   };
   if (!std::isfinite(e) || !g.allFinite()) return finish(StepStatus::non_finite);
   report.accepted_energies.push_back(e);
   const bool trace_on = std::getenv("WEFT_NEWTON_TRACE") != nullptr;
   for (int it = 0; it < options_.max_iterations; ++it) {
-    if (residual(g) <= options_.tolerance) return finish(StepStatus::converged);
+    report.residual_history.push_back(residual(g));
+    report.residual_ms.push_back(ms_since(t_start));
+    if (report.residual_history.back() <= options_.tolerance) return finish(StepStatus::converged);
     evaluate(x, nullptr, &hessian_, &report.energy_ms);
     hessian_corrected_ = false;
     exact_differs_ = false;

@@ -86,6 +86,11 @@ struct NewtonReport {
   int curvature_steps = 0;    // iterations that also moved along negative curvature
   double regularization = 0;  // δ after the step, N/m
   std::vector<double> accepted_energies;  // E after each accepted iteration (first: start)
+  // The residual (as `residual`) at the start and after each accepted iteration, and the
+  // wall time since minimize() began when each was known (ms): the time the step would
+  // have taken to a looser tolerance along the same path.
+  std::vector<double> residual_history;
+  std::vector<double> residual_ms;
   // Wall time split, milliseconds: energies' evaluate (by energy, values and derivatives),
   // numeric factorisation + solves, everything.
   std::vector<double> energy_ms;
