@@ -14,8 +14,9 @@
 //   median batch wall time (target <= 1.5 s) and CPU time.
 // Usage: bench_simulation_windows DATASET [N] [SEED]
 //                                 [frames=2] [batches=5] [batch_windows=8] [threads=2]
-//                                 [mode=all|robustness|batch]
+//                                 [mode=all|robustness|batch] [first=0]
 // e.g. bench_simulation_windows /tmp/runs/training 500 1
+// first=ID runs the robustness windows ID .. ID + N − 1 (one window again: N = 1).
 // The simulation settings are the dataset's own (dataset.yaml's simulation section). Prints
 // one line per window and a SUMMARY line.
 #include <algorithm>
@@ -122,7 +123,7 @@ static int run(int argc_all, char** argv_all) {
   }
   if (positional.size() < 2) {
     std::fprintf(stderr, "usage: bench_simulation_windows DATASET [N] [SEED] [frames=2] [batches=5] "
-                         "[batch_windows=8] [threads=2] [mode=all|robustness|batch]\n");
+                         "[batch_windows=8] [threads=2] [mode=all|robustness|batch] [first=0]\n");
     return 2;
   }
   const std::string dataset = positional[1];
@@ -139,6 +140,7 @@ static int run(int argc_all, char** argv_all) {
   const int batch_windows = std::atoi(key("batch_windows", "8").c_str());
   const int threads = std::atoi(key("threads", "2").c_str());
   const std::string mode = key("mode", "all");
+  const int first = std::atoi(key("first", "0").c_str());  // robustness: windows first .. first + N − 1
   if (!named.empty()) {
     std::fprintf(stderr, "bench_simulation_windows: unknown option '%s'\n", named.begin()->first.c_str());
     return 2;
@@ -163,7 +165,7 @@ static int run(int argc_all, char** argv_all) {
   std::vector<double> window_ms, window_cpu_ms, build_ms, iterations;
   if (mode == "all" || mode == "robustness") {
     set_num_threads(1);
-    for (int id = 0; id < n; ++id) {
+    for (int id = first; id < first + n; ++id) {
       const Start st = make_start(s, rest, id, frames, seed);
       const auto t0 = std::chrono::steady_clock::now();
       const double c0 = cpu_ms();
