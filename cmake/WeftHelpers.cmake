@@ -6,6 +6,19 @@ function(weft_precompile target)
     target_precompile_headers(${target} PRIVATE ${ARGN})
   endif()
 endfunction()
+# weft_unity(TARGET): with WEFT_UNITY_BATCH > 0, the target's sources are compiled
+# WEFT_UNITY_BATCH at a time as one translation unit (CMake's unity build): their shared
+# headers (GoogleTest, Eigen, nlohmann-json, CLI11) are parsed once per batch. Used for
+# the tests and apps/, whose compile time is mostly headers; never for the layers, whose
+# optimised code should not depend on which files happen to share a batch. Files of one
+# batch share a namespace scope: helpers in an anonymous namespace need names of their
+# own (or belong in a shared test header).
+function(weft_unity target)
+  if(WEFT_UNITY_BATCH GREATER 0)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON
+      UNITY_BUILD_MODE BATCH UNITY_BUILD_BATCH_SIZE ${WEFT_UNITY_BATCH})
+  endif()
+endfunction()
 set(WEFT_PCH_COMMON <vector> <string> <memory> <functional> <Eigen/Core> <Eigen/Geometry>)
 
 # weft_layer(NAME DEPS...): a shared library from every .cpp in the current folder.
@@ -50,6 +63,7 @@ function(weft_test_folder layer)
       add_executable(${target} ${files} ${helpers})
       target_link_libraries(${target} PRIVATE ${ARGN} GTest::gtest GTest::gtest_main GTest::gmock)
       weft_precompile(${target} ${WEFT_PCH_COMMON} <gtest/gtest.h>)
+      weft_unity(${target})
       target_compile_definitions(${target} PRIVATE
         WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" WEFT_BINARY_DIR="${CMAKE_BINARY_DIR}")
       gtest_discover_tests(${target} TEST_PREFIX "${layer}." DISCOVERY_MODE PRE_TEST

@@ -36,7 +36,7 @@ using weft::capture::testing::slurp;
 
 namespace {
 
-fs::path scratch_root() { return weft::capture::testing::process_scratch("eval"); }
+fs::path eval_scratch_root() { return weft::capture::testing::process_scratch("eval"); }
 
 // The tiny dataset (shared_fixture.h).
 fs::path tiny() { return weft::capture::testing::tiny_dataset(); }
@@ -53,7 +53,7 @@ fs::path perfect_capture(const std::string& name, const std::vector<int>& frames
   const Character ch = load_character(info.character);
   const Motion gt = read_motion((tiny() / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
   const PoseParametrisation param = pose_parametrisation(ch);
-  const fs::path dir = scratch_root() / name;
+  const fs::path dir = eval_scratch_root() / name;
   fs::remove_all(dir);
   fs::create_directories(dir / "meshes");
   nlohmann::json j = {{"format", "weft-capture/1"},  {"model", "/nowhere/model"},
@@ -176,7 +176,7 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
   EXPECT_EQ(e.overlays[0].image.cols, 2 * 256);
 
   // The report: every metric present.
-  const fs::path report = scratch_root() / "report_perfect";
+  const fs::path report = eval_scratch_root() / "report_perfect";
   fs::create_directories(report);
   std::ofstream(report / "overlay_worst_0099.png") << "an earlier report's";
   const std::vector<std::string> written = write_evaluation_report(e, report.string());
@@ -272,7 +272,7 @@ TEST(CaptureEvaluationIntegration, WithoutSimulationSettingsTheForceIsSkippedAnd
   const fs::path capture = perfect_capture("no_synth", {0, 1, 2});
   // A dataset from before datasets carried their simulation settings: the tiny dataset's
   // files, its dataset.yaml without the simulation section.
-  const fs::path old = scratch_root() / "dataset_without_simulation";
+  const fs::path old = eval_scratch_root() / "dataset_without_simulation";
   fs::remove_all(old);
   fs::create_directories(old);
   for (const auto& entry : fs::directory_iterator(tiny()))
@@ -337,26 +337,26 @@ TEST(CaptureEvaluationIntegration, BadCaptureFoldersAreErrorsNamingTheFile) {
 
 TEST(CaptureEvaluationIntegration, CommandWritesTheReport) {
   const fs::path capture = perfect_capture("command", {0, 1, 2, 3});
-  const fs::path report = scratch_root() / "report_command";
+  const fs::path report = eval_scratch_root() / "report_command";
   const std::string cmd = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " + capture.string() +
                           " --data " + tiny().string() + " --out " + report.string() +
                           " --view cam05 --iou-every 2 > " +
-                          (scratch_root() / "eval.out").string() + " 2>&1";
+                          (eval_scratch_root() / "eval.out").string() + " 2>&1";
   const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(scratch_root() / "eval.out");
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(eval_scratch_root() / "eval.out");
   const nlohmann::json j = nlohmann::json::parse(slurp(report / "metrics.json"));
   EXPECT_EQ(j["view"], "cam05");
   EXPECT_EQ(j["summary"]["iou"]["frames"], 2);
   EXPECT_TRUE(fs::exists(report / "report.html"));
-  const std::string log = slurp(scratch_root() / "eval.out");
+  const std::string log = slurp(eval_scratch_root() / "eval.out");
   EXPECT_NE(log.find("AMVIoU"), std::string::npos) << log;
   // A missing prediction folder: one error naming it, and no report written.
-  const fs::path nothing = scratch_root() / "report_nothing";
+  const fs::path nothing = eval_scratch_root() / "report_nothing";
   const std::string bad = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " +
-                          (scratch_root() / "no_capture").string() + " --data " + tiny().string() + " --out " +
-                          nothing.string() + " > " + (scratch_root() / "bad.out").string() + " 2>&1";
+                          (eval_scratch_root() / "no_capture").string() + " --data " + tiny().string() + " --out " +
+                          nothing.string() + " > " + (eval_scratch_root() / "bad.out").string() + " 2>&1";
   const int bad_status = std::system(bad.c_str());
   EXPECT_TRUE(WIFEXITED(bad_status) && WEXITSTATUS(bad_status) == 1);
-  EXPECT_NE(slurp(scratch_root() / "bad.out").find("no_capture: no such capture folder"), std::string::npos);
+  EXPECT_NE(slurp(eval_scratch_root() / "bad.out").find("no_capture: no such capture folder"), std::string::npos);
   EXPECT_FALSE(fs::exists(nothing / "report.html"));
 }

@@ -37,7 +37,7 @@ using weft::capture::testing::repo_file;
 
 namespace {
 
-fs::path scratch_root() { return weft::capture::testing::process_scratch("infer"); }
+fs::path infer_scratch_root() { return weft::capture::testing::process_scratch("infer"); }
 
 struct Fixture {
   fs::path data, model;
@@ -76,7 +76,7 @@ TEST(Infer, WritesEveryFileAndThePoseFilesPutTheSkeletonWhereTheMeshesAre) {
   o.camera = (f.data / "cameras.yaml").string();
   o.camera_name = "cam02";
   o.keypoints = (f.data / "keypoints" / "cam02").string();
-  o.out = (scratch_root() / "capture").string();
+  o.out = (infer_scratch_root() / "capture").string();
   int networks_calls = 0, mesh_calls = 0;
   const CaptureSummary s = capture_sequence(o, [&](const std::string& pass, int, int total) {
     EXPECT_EQ(total, 6);
@@ -162,7 +162,7 @@ TEST(Infer, TheSilhouettePlacesABodyWhereItWasRendered) {
 
 TEST(Infer, BadInputsNameTheFileAndLeaveNoCapture) {
   const Fixture& f = fixture();
-  const fs::path root = scratch_root() / "bad";
+  const fs::path root = infer_scratch_root() / "bad";
   fs::create_directories(root);
   CaptureOptions o;
   o.model = f.model.string();
@@ -211,7 +211,7 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
   o.keypoints = (f.data / "keypoints" / "cam05").string();
   o.masks = (f.data / "masks" / "cam05").string();
   o.iterations = 6;
-  o.out = (scratch_root() / "adapted").string();
+  o.out = (infer_scratch_root() / "adapted").string();
   const AdaptSummary s = adapt_model(o);
   EXPECT_EQ(s.frames, 6);
   EXPECT_EQ(s.training.last_step, 12);
@@ -228,7 +228,7 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
 
   // Interrupted after step 3 and resumed: the same losses as the uninterrupted run.
   AdaptOptions interrupted = o;
-  interrupted.out = (scratch_root() / "adapted_resumed").string();
+  interrupted.out = (infer_scratch_root() / "adapted_resumed").string();
   interrupted.stop_after = 3;
   adapt_model(interrupted);
   interrupted.stop_after = -1;
@@ -262,7 +262,7 @@ TEST(Infer, ResolvesCollisionsWhenAsked) {
   o.camera_name = "cam04";
   o.keypoints = (f.data / "keypoints" / "cam04").string();
   o.resolve_collisions = true;
-  o.out = (scratch_root() / "resolved").string();
+  o.out = (infer_scratch_root() / "resolved").string();
   const CaptureSummary s = capture_sequence(o);
   EXPECT_TRUE(s.part_seconds.count("collisions"));
   EXPECT_LE(s.penetration_after, 1e-3 / s.metres_per_unit);  // ≤ 1 mm

@@ -43,13 +43,6 @@ namespace {
 
 fs::path scratch() { return fs::temp_directory_path() / ("weft_data_parallel_test_" + std::to_string(::getpid())); }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // mpirun on PATH, or empty.
 std::string find_mpirun() {
   const char* path = std::getenv("PATH");

@@ -16,7 +16,7 @@ using namespace weft::capture;
 
 namespace {
 
-const std::string& kDdc = weft::testing::kDdcDir;
+using weft::testing::kDdcDir;
 const std::string kConfig = WEFT_SOURCE_DIR "/configs/characters/ddc.yaml";
 
 #define REQUIRE_DDC() REQUIRE_DDC_DATA()
@@ -49,7 +49,7 @@ TEST(Ddc, LoadsTheTemplate) {
   EXPECT_NEAR(ch.body.graph.rigidity.minCoeff(), 0.2, 1e-12);
   EXPECT_NEAR(ch.body.graph.rigidity.maxCoeff(), 1.0, 1e-12);
   // The Skeletool .character imports the same skeleton, mesh and weights.
-  const Character sk = load_character(kDdc + "/ddc.character");
+  const Character sk = load_character(kDdcDir + "/ddc.character");
   EXPECT_EQ(sk.body.mesh.V, ch.body.mesh.V);
   EXPECT_EQ(sk.rest_dofs, ch.rest_dofs);
   EXPECT_EQ(sk.body.weights.dense(), ch.body.weights.dense());
@@ -58,7 +58,7 @@ TEST(Ddc, LoadsTheTemplate) {
 TEST(Ddc, PosesTheCapturedWalk) {
   REQUIRE_DDC();
   const Character ch = load_character(kConfig);
-  const Motion walk = read_motion(kDdc + "/walk_0000_0299.motion", ch.skeleton.num_dofs());
+  const Motion walk = read_motion(kDdcDir + "/walk_0000_0299.motion", ch.skeleton.num_dofs());
   ASSERT_EQ(walk.num_frames(), 300);
 
   // The rest pose reproduces the template (within 1e-4 mm), with either skinning.
@@ -134,7 +134,7 @@ TEST(Ddc, PosesTheCapturedWalk) {
 
 TEST(Ddc, TemplateRoundTripsThroughPly) {
   REQUIRE_DDC();
-  const TriangleMesh m = read_obj(kDdc + "/ddc.obj");
+  const TriangleMesh m = read_obj(kDdcDir + "/ddc.obj");
   const std::string tmp = (std::filesystem::temp_directory_path() / ("weft_ddc_" + std::to_string(::getpid()) + ".ply")).string();
   write_ply(tmp, m);
   const TriangleMesh r = read_ply(tmp);

@@ -13,14 +13,14 @@
 namespace weft::capture {
 namespace {
 
-const std::string& kDdc = weft::testing::kDdcDir;
+using weft::testing::kDdcDir;
 
 class DeformationLayerDdc : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    if (!std::filesystem::exists(kDdc + "/ddc.skeleton")) return;
+    if (!std::filesystem::exists(kDdcDir + "/ddc.skeleton")) return;
     character_ = new Character(load_character(std::string(WEFT_SOURCE_DIR) + "/configs/characters/ddc.yaml"));
-    motion_ = new Motion(read_motion(kDdc + "/walk_0000_0299.motion", character_->skeleton.num_dofs()));
+    motion_ = new Motion(read_motion(kDdcDir + "/walk_0000_0299.motion", character_->skeleton.num_dofs()));
   }
   static void TearDownTestSuite() {
     delete character_;

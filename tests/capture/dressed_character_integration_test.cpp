@@ -27,7 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string& kDdc = weft::testing::kDdcDir;
+using weft::testing::kDdcDir;
 const std::string kConfig = WEFT_SOURCE_DIR "/configs/characters/ddc_skirt.yaml";
 
 #define REQUIRE_DDC() REQUIRE_DDC_DATA()
@@ -101,7 +101,7 @@ TEST(DressedDdc, WrittenFolderReferencesTheDdcFilesAndLoadsBack) {
   for (const auto& e : fs::directory_iterator(dir.file("out"))) written.insert(e.path().filename().string());
   EXPECT_EQ(written, (std::set<std::string>{"character.yaml", "skirt.obj", "anchors.txt", "inactive_faces.txt"}));
   const std::string text = slurp(yaml);
-  const std::string ddc_dir = fs::canonical(kDdc).string();
+  const std::string ddc_dir = fs::canonical(kDdcDir).string();
   for (const char* file : {"ddc.skeleton", "ddc.motion", "ddc.obj", "ddc.skin", "segmentation.txt", "ddc_graph.obj"})
     EXPECT_NE(text.find(" " + ddc_dir + "/" + file + "\n"), std::string::npos) << file << " in\n" << text;
 
@@ -132,8 +132,8 @@ TEST(DressedDdc, AnchorsStayOnTheBodyThroughTheWalk) {
   REQUIRE_DDC();
   ScratchDir dir("dressed_ddc_walk");
   const Character ch = load_character(write_default_character(dressed(), config(), dir.file("out")));
-  const Motion rest = read_motion(kDdc + "/ddc.motion", ch.skeleton.num_dofs());
-  const Motion walk = read_motion(kDdc + "/walk_0000_0299.motion", ch.skeleton.num_dofs());
+  const Motion rest = read_motion(kDdcDir + "/ddc.motion", ch.skeleton.num_dofs());
+  const Motion walk = read_motion(kDdcDir + "/walk_0000_0299.motion", ch.skeleton.num_dofs());
   std::vector<Eigen::VectorXd> poses{rest.dofs.row(0).transpose()};
   for (int f = 0; f < walk.num_frames(); f += 10) poses.push_back(walk.dofs.row(f).transpose());
 

@@ -26,7 +26,7 @@ using weft::capture::testing::expect_error;
 
 namespace {
 
-const std::string& kDdc = weft::testing::kDdcDir;
+using weft::testing::kDdcDir;
 const std::string kDdcConfig = WEFT_SOURCE_DIR "/configs/characters/ddc.yaml";
 const std::string kCmu = "/usr/share/assimp/models/BVH/01_01.bvh";
 const std::string kConfigs = WEFT_SOURCE_DIR "/configs/";

@@ -9,25 +9,17 @@
 #include "capture/motion/bvh.h"
 #include "capture/motion/motion_retarget.h"
 #include "capture/motion/procedural_motion.h"
+#include "tests/capture/motion_measures.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
+using weft::capture::testing::max_acceleration;
 
 namespace {
 
 const std::string kMotions = WEFT_SOURCE_DIR "/configs/motions/";
-
-// Largest |second difference| / dt² over all channels: an acceleration estimate. For a
-// C1 motion it stays bounded as dt shrinks; a kink (velocity jump Δv) makes it ≈ Δv/dt.
-double max_acceleration(const BvhMotion& m) {
-  const double dt = m.frame_time_s;
-  double a = 0;
-  for (int f = 1; f + 1 < m.num_frames(); ++f)
-    a = std::max(a, ((m.frames.row(f + 1) - 2 * m.frames.row(f) + m.frames.row(f - 1)).cwiseAbs().maxCoeff()) / (dt * dt));
-  return a;
-}
 
 TEST(Procedural, SpecsGiveDurationTimesFpsFrames) {
   for (const char* name : {"walk_in_place", "arm_swings", "squat_jump"}) {

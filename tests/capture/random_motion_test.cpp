@@ -10,11 +10,13 @@
 #include "capture/motion/bvh.h"
 #include "capture/motion/procedural_motion.h"
 #include "capture/motion/random_motion.h"
+#include "tests/capture/motion_measures.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
+using weft::capture::testing::max_acceleration;
 
 namespace {
 
@@ -24,15 +26,6 @@ MotionSpec random_spec(double duration_s, uint64_t seed) {
   return parse_motion_spec("segments:\n  - {type: random, duration: " + std::to_string(duration_s) +
                                ", seed: " + std::to_string(seed) + "}\n",
                            "r.yaml");
-}
-
-// Largest |second difference| / dt² over the channels (see procedural_motion_test.cpp).
-double max_acceleration(const BvhMotion& m) {
-  const double dt = m.frame_time_s;
-  double a = 0;
-  for (int f = 1; f + 1 < m.num_frames(); ++f)
-    a = std::max(a, (m.frames.row(f + 1) - 2 * m.frames.row(f) + m.frames.row(f - 1)).cwiseAbs().maxCoeff() / (dt * dt));
-  return a;
 }
 
 TEST(RandomMotion, ConfigGivesSixtySecondsAndIsDeterministic) {

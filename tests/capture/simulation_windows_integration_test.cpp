@@ -34,7 +34,7 @@ namespace {
 
 
 
-fs::path scratch_root() { return fs::temp_directory_path() / ("weft_windows_test_" + std::to_string(::getpid())); }
+fs::path windows_scratch_root() { return fs::temp_directory_path() / ("weft_windows_test_" + std::to_string(::getpid())); }
 
 // 8 frames of the walk with the 448-vertex skirt; one small view (the windows need only gt/).
 std::string config_text() {
@@ -62,7 +62,7 @@ const Fixture& fixture() {
   static std::unique_ptr<Fixture> f;
   if (!f) {
     f = std::make_unique<Fixture>();
-    const fs::path root = scratch_root();
+    const fs::path root = windows_scratch_root();
     fs::remove_all(root);
     fs::create_directories(root);
     const fs::path config = root / "windows_test.yaml";
@@ -74,7 +74,7 @@ const Fixture& fixture() {
     static struct Cleanup {
       ~Cleanup() {
         std::error_code ec;
-        fs::remove_all(scratch_root(), ec);
+        fs::remove_all(windows_scratch_root(), ec);
       }
     } cleanup;
   }

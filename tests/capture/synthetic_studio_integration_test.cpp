@@ -68,7 +68,7 @@ struct Dataset {
   SynthSummary summary;
 };
 
-fs::path scratch_root() {
+fs::path studio_scratch_root() {
   return fs::temp_directory_path() / ("weft_synth_test_" + std::to_string(::getpid()));
 }
 
@@ -77,14 +77,14 @@ const Dataset& dataset() {
   static std::unique_ptr<Dataset> d;
   if (!d) {
     d = std::make_unique<Dataset>();
-    d->dir = scratch_root() / "a";
+    d->dir = studio_scratch_root() / "a";
     fs::remove_all(d->dir);
     d->config = parse_synth_config(config_text(7), "studio_test.yaml");
     d->summary = synthesize_dataset(d->config, d->dir.string());
     static struct Cleanup {
       ~Cleanup() {
         std::error_code ec;
-        fs::remove_all(scratch_root(), ec);
+        fs::remove_all(studio_scratch_root(), ec);
       }
     } cleanup;
   }
@@ -248,7 +248,7 @@ TEST(SyntheticStudio, TheDatasetCarriesItsSimulationSettings) {
 TEST(SyntheticStudio, OneSeedGivesIdenticalFiles) {
   REQUIRE_HUMAN();
   const Dataset& d = dataset();
-  const fs::path again = scratch_root() / "b";
+  const fs::path again = studio_scratch_root() / "b";
   fs::remove_all(again);
   synthesize_dataset(parse_synth_config(config_text(7), "studio_test.yaml"), again.string());
   int compared = 0;

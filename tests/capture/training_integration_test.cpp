@@ -47,7 +47,7 @@ namespace {
 std::string weft_binary() { return std::string(WEFT_BINARY_DIR) + "/apps/weft"; }
 
 
-fs::path scratch_root() { return weft::capture::testing::process_scratch("training"); }
+fs::path training_scratch_root() { return weft::capture::testing::process_scratch("training"); }
 
 struct Fixture {
   fs::path data;       // the tiny dataset (shared_fixture.h)
@@ -70,13 +70,6 @@ const Fixture& fixture() {
         f->validation_samples >> f->validation_iou;
   }
   return *f;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 double mean_total(const std::vector<LossRow>& rows, size_t first, size_t count) {
@@ -224,7 +217,7 @@ TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
   const Fixture& f = fixture();
   const std::string expected = slurp(f.reference / "losses.csv");
   const TrainingConfig cfg = load_training_config(repo_file("configs/train/tiny.yaml"));
-  const fs::path run = scratch_root() / "killed";
+  const fs::path run = training_scratch_root() / "killed";
   int64_t stage_start = 0;
   for (const StageConfig& s : cfg.stages) {
     const int64_t kill_at = stage_start + s.steps / 2 + 1;  // after a checkpoint inside the stage
@@ -248,7 +241,7 @@ TEST(Training, ResumeAfterSigkillInEachStageGivesTheSameLosses) {
 // runs its windows on the true bodies; without gt/pose.motion it is one clear error.
 TEST(Training, OraclePoseDrivesTheDeformationStagesByTheGroundTruth) {
   REQUIRE_HUMAN();
-  const fs::path dir = scratch_root() / "oracle";
+  const fs::path dir = training_scratch_root() / "oracle";
   fs::create_directories(dir);
   const fs::path config = dir / "oracle.yaml";
   std::ofstream(config) << "seed: 3\noracle_pose: true\nnetwork: {backbone: resnet18, input_size: 64}\n"
@@ -360,14 +353,14 @@ TEST(Training, SplitEvaluationMeasuresEveryPrediction) {
 
 TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
   REQUIRE_HUMAN();
-  const fs::path data = scratch_root() / "missing_file";
+  const fs::path data = training_scratch_root() / "missing_file";
   fs::copy(tiny_data(), data, fs::copy_options::recursive);
   const fs::path gone = data / "keypoints" / "cam03" / "0002_keypoints.json";
   ASSERT_TRUE(fs::remove(gone));
   TrainOptions o;
   o.config = repo_file("configs/train/tiny.yaml");
   o.data = data.string();
-  o.run = (scratch_root() / "missing_file_run").string();
+  o.run = (training_scratch_root() / "missing_file_run").string();
   try {
     train(o);
     FAIL() << "expected an error";
@@ -381,12 +374,12 @@ TEST(Training, AMissingKeypointFileIsAnErrorNamingIt) {
 // untouched, finite and loadable.
 TEST(Training, ANonFiniteLossStopsTheRunAndNeverReachesACheckpoint) {
   REQUIRE_HUMAN();
-  const fs::path data = scratch_root() / "absurd_keypoints";
+  const fs::path data = training_scratch_root() / "absurd_keypoints";
   fs::copy(tiny_data(), data, fs::copy_options::recursive);
   TrainOptions o;
   o.config = repo_file("configs/train/tiny.yaml");
   o.data = data.string();
-  o.run = (scratch_root() / "nan_run").string();
+  o.run = (training_scratch_root() / "nan_run").string();
   o.stop_after = 5;
   train(o);
   const fs::path checkpoint = fs::path(o.run) / "checkpoints" / "step_0000005.safetensors";
@@ -567,7 +560,7 @@ TEST(CaptureNetworks, TheKeypointBranchReadsTheDetectionsLearnsAndIsSaved) {
     weft::NoGradGuard no_grad;
     learnt = nets.pose(batch);
   }
-  const fs::path file = scratch_root() / "keypoint_branch.safetensors";
+  const fs::path file = training_scratch_root() / "keypoint_branch.safetensors";
   fs::create_directories(file.parent_path());
   weft::nn::save_weights(file.string(), nets);
   CaptureNetworks read_back(ch, config, 99);
