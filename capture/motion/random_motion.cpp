@@ -191,6 +191,16 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
   for (size_t k = 1; k < K; ++k) {
     bool hold[kGroups];
     for (bool& h : hold) h = rng.uniform() < c.hold_probability;
+    // The rule of every key (degrees): the last key is the neutral pose, and keys in the
+    // last kReturn_s seconds head back to it; otherwise a held group keeps its value and
+    // any other moves toward its drawn value by at most max_speed × the key interval.
+    const bool last = k + 1 == K, returning = times_[k] > duration_s - kReturn_s;
+    const double step = c.max_speed_deg_s * (times_[k] - times_[k - 1]);
+    auto next_key = [&](double previous, double drawn, bool held) {
+      if (last) return 0.0;
+      if (held && !returning) return previous;
+      return previous + std::clamp((returning ? 0.0 : drawn) - previous, -step, step);
+    };
     for (int j = 0; j < kRandomJointCount; ++j)
       for (int side = 0; side < (is_arm(j) ? 2 : 1); ++side) {
         double drawn[3];
@@ -202,24 +212,12 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
           // Across the body only in front of it: full adduction from 70° of flexion on.
           drawn[1] *= std::clamp((drawn[0] - 20) / 50, 0.0, 1.0);
         }
-        // Keys in the last kReturn_s seconds head back to the neutral pose.
-        const bool last = k + 1 == K, returning = times_[k] > duration_s - kReturn_s;
-        if (returning) drawn[0] = drawn[1] = drawn[2] = 0;
-        const bool keep = hold[group_of(j, side)] && !returning;
         for (int a = 0; a < 3; ++a) {
           std::vector<double>& v = angles[curve_index(j, side, a)];
-          const double step = c.max_speed_deg_s * (times_[k] - times_[k - 1]);
-          v[k] = last ? 0.0 : keep ? v[k - 1] : v[k - 1] + std::clamp(drawn[a] - v[k - 1], -step, step);
+          v[k] = next_key(v[k - 1], drawn[a], hold[group_of(j, side)]);
         }
       }
-    {
-      const bool last = k + 1 == K, returning = times_[k] > duration_s - kReturn_s;
-      const double u = pelvis_rng.uniform(c.pelvis_pitch_deg.lo, c.pelvis_pitch_deg.hi), drawn = returning ? 0.0 : u;
-      const double step = c.max_speed_deg_s * (times_[k] - times_[k - 1]);
-      pitch[k] = last ? 0.0
-                 : hold[torso] && !returning ? pitch[k - 1]
-                                             : pitch[k - 1] + std::clamp(drawn - pitch[k - 1], -step, step);
-    }
+    pitch[k] = next_key(pitch[k - 1], pelvis_rng.uniform(c.pelvis_pitch_deg.lo, c.pelvis_pitch_deg.hi), hold[torso]);
     const double u_turn = rng.uniform(), new_target = rng.uniform(0, 360);
     if (u_turn < c.turn_probability) target = heading[k - 1] + std::remainder(new_target - heading[k - 1], 360.0);
     heading[k] = heading[k - 1] + std::clamp(target - heading[k - 1], -c.max_turn_deg, c.max_turn_deg);
