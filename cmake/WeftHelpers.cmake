@@ -1,11 +1,42 @@
-# weft_precompile(TARGET HEADERS...): with WEFT_PCH, the target precompiles these
-# (angle-bracket) headers once instead of parsing them in every source file: Eigen,
-# GoogleTest and CLI11 are most of the compile time of a typical weft source file.
+# Precompiled headers. With WEFT_PCH, Eigen, the standard containers (and GoogleTest in the
+# tests, CLI11 in apps/) are parsed once per build instead of once per source file. The
+# layers share one precompiled header and the test executables another (weft_pch_layer,
+# weft_pch_test below): GCC accepts a precompiled header only under the same code-generation
+# flags (-fPIC, -march, -fopenmp, -O), which every layer shares and every test shares, and
+# each header costs ~10 s of CPU to build. Should the flags ever differ, GCC warns
+# (-Winvalid-pch) and parses the headers instead: slower, never wrong.
+set(WEFT_PCH_COMMON <vector> <string> <memory> <functional> <Eigen/Core> <Eigen/Geometry>)
+
+# weft_precompile(TARGET HEADERS...): TARGET precompiles these (angle-bracket) headers itself.
 function(weft_precompile target)
   if(WEFT_PCH)
     target_precompile_headers(${target} PRIVATE ${ARGN})
   endif()
 endfunction()
+
+# weft_pch_holder(NAME PIC HEADERS headers... LIBS libs...): an object library that only
+# compiles the precompiled header its users take with weft_shared_pch; PIC and LIBS give it
+# their code-generation flags and definitions.
+function(weft_pch_holder name pic)
+  if(NOT WEFT_PCH)
+    return()
+  endif()
+  cmake_parse_arguments(PARSE_ARGV 2 arg "" "" "HEADERS;LIBS")
+  file(CONFIGURE OUTPUT ${CMAKE_BINARY_DIR}/pch/${name}.cpp
+    CONTENT "// Compiles the precompiled header of ${name} (cmake/WeftHelpers.cmake).\n")
+  add_library(${name} OBJECT ${CMAKE_BINARY_DIR}/pch/${name}.cpp)
+  target_link_libraries(${name} PRIVATE weft_options ${arg_LIBS})
+  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ${pic})
+  target_precompile_headers(${name} PRIVATE ${arg_HEADERS})
+endfunction()
+
+# weft_shared_pch(TARGET HOLDER): TARGET uses HOLDER's precompiled header.
+function(weft_shared_pch target holder)
+  if(WEFT_PCH)
+    target_precompile_headers(${target} REUSE_FROM ${holder})
+  endif()
+endfunction()
+
 # weft_unity(TARGET): with WEFT_UNITY_BATCH > 0, the target's sources are compiled
 # WEFT_UNITY_BATCH at a time as one translation unit (CMake's unity build): their shared
 # headers (GoogleTest, Eigen, nlohmann-json, CLI11) are parsed once per batch. Used for
@@ -19,7 +50,6 @@ function(weft_unity target)
       UNITY_BUILD_MODE BATCH UNITY_BUILD_BATCH_SIZE ${WEFT_UNITY_BATCH})
   endif()
 endfunction()
-set(WEFT_PCH_COMMON <vector> <string> <memory> <functional> <Eigen/Core> <Eigen/Geometry>)
 
 # weft_layer(NAME DEPS...): a shared library from every .cpp in the current folder.
 # Shared, so that ops registered by static initialisers (WEFT_REGISTER_OP) are always
@@ -29,7 +59,7 @@ function(weft_layer name)
   if(sources)
     add_library(${name} SHARED ${sources})
     target_link_libraries(${name} PUBLIC weft_options ${ARGN})
-    weft_precompile(${name} ${WEFT_PCH_COMMON})
+    weft_shared_pch(${name} weft_pch_layer)
   else()  # a layer with no sources yet
     add_library(${name} INTERFACE)
     target_link_libraries(${name} INTERFACE weft_options ${ARGN})
@@ -62,7 +92,11 @@ function(weft_test_folder layer)
       set(target test_${layer}_${label})
       add_executable(${target} ${files} ${helpers})
       target_link_libraries(${target} PRIVATE ${ARGN} GTest::gtest GTest::gtest_main GTest::gmock)
-      weft_precompile(${target} ${WEFT_PCH_COMMON} <gtest/gtest.h>)
+      if(TARGET weft_pch_test AND "weft_graph" IN_LIST ARGN)
+        weft_shared_pch(${target} weft_pch_test)
+      else()  # not built with the layers' flags (tests/layers reads sources only)
+        weft_precompile(${target} ${WEFT_PCH_COMMON} <gtest/gtest.h>)
+      endif()
       weft_unity(${target})
       target_compile_definitions(${target} PRIVATE
         WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" WEFT_BINARY_DIR="${CMAKE_BINARY_DIR}")
