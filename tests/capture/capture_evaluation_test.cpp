@@ -14,7 +14,7 @@
 #include "capture/evaluation/frame_measures.h"
 #include "capture/render/renderer.h"
 #include "capture/studio/studio_rig.h"
-#include "tests/capture/grid_mesh.h"
+#include "tests/capture/sphere_and_sheet.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft;
@@ -22,28 +22,16 @@ using namespace weft::capture;
 namespace physics = weft::physics;
 using weft::capture::testing::expect_error;
 using weft::capture::testing::ScratchDir;
+using weft::capture::testing::sphere_and_sheet;
 
 namespace {
-
-// A character in metres: a sphere body (radius 0.3 m at `body_centre`) and a 0.2 m
-// square garment with no anchors (nothing pinned).
-Character sphere_and_sheet(const Eigen::Vector3d& body_centre) {
-  Character ch;
-  ch.name = "sphere_and_sheet";
-  ch.source = "constructed";
-  ch.metres_per_unit = 1.0;
-  ch.body.mesh = uv_sphere(body_centre, 0.3, 16, 32);
-  ch.cloth.emplace();
-  ch.cloth->mesh = weft::capture::testing::grid_mesh(Eigen::Vector3d(-0.1, 0.9, 0.4), 0.2, 5, 5);
-  return ch;
-}
 
 Vertices translated(const Vertices& V, const Eigen::Vector3d& d) { return V.rowwise() + d.transpose(); }
 
 }  // namespace
 
 TEST(CaptureEvaluation, MeshExactlyOnItsMaskHasIoUOne) {
-  const Character ch = sphere_and_sheet(Eigen::Vector3d(0, 1, 0));
+  const Character ch = sphere_and_sheet(Eigen::Vector3d(0, 1, 0), 0.3, 16, 32);
   const std::vector<Camera> cams = {
       look_at_camera("front", Eigen::Vector3d(0, 1.2, 3), Eigen::Vector3d(0, 1, 0), 160, 120, 40),
       look_at_camera("side", Eigen::Vector3d(3, 1.1, 0.5), Eigen::Vector3d(0, 1, 0), 120, 160, 45)};
@@ -72,7 +60,7 @@ TEST(CaptureEvaluation, MeshExactlyOnItsMaskHasIoUOne) {
 
 TEST(CaptureEvaluation, ClothVertexFiveMillimetresInsideASpherePenetratesHalfACentimetre) {
   const Eigen::Vector3d centre(0, 1, 0);
-  const Character ch = sphere_and_sheet(centre);
+  const Character ch = sphere_and_sheet(centre, 0.3, 16, 32);
   // A face near the equator: its centroid moved 5 mm inward along its outward normal.
   const TriangleMesh& s = ch.body.mesh;
   const Vertices normals = face_normals(s.V, s.F);
@@ -106,7 +94,7 @@ TEST(CaptureEvaluation, ClothVertexFiveMillimetresInsideASpherePenetratesHalfACe
 
 TEST(CaptureEvaluation, FreeFallingClothIsInBalanceAndClothHeldStillIsOutByItsWeight) {
   // The body far from the garment: no contact; no anchors: no pins; only gravity acts.
-  const Character ch = sphere_and_sheet(Eigen::Vector3d(0, -100, 0));
+  const Character ch = sphere_and_sheet(Eigen::Vector3d(0, -100, 0), 0.3, 16, 32);
   const SynthSimulationConfig simulation;
   const double fps = 30, h = 1 / fps;
   const Eigen::Vector3d g = physics::SimulationSettings{}.gravity;

@@ -15,25 +15,13 @@
 #include "capture/evaluation/frame_measures.h"
 #include "geometry/mesh.h"
 #include "graph/error.h"
-#include "tests/capture/grid_mesh.h"
+#include "tests/capture/sphere_and_sheet.h"
 
 using namespace weft;
 using namespace weft::capture;
+using weft::capture::testing::sphere_and_sheet;
 
 namespace {
-
-// A character in metres: a sphere body (`radius` at `centre`) and the sheet garment
-// centred at (0, 1, 0.4), no anchors.
-Character sphere_and_sheet(const Eigen::Vector3d& centre, double radius = 0.3) {
-  Character ch;
-  ch.name = "sphere_and_sheet";
-  ch.source = "constructed";
-  ch.metres_per_unit = 1.0;
-  ch.body.mesh = uv_sphere(centre, radius, 24, 48);
-  ch.cloth.emplace();
-  ch.cloth->mesh = weft::capture::testing::grid_mesh(Eigen::Vector3d(-0.1, 0.9, 0.4), 0.2, 5, 5);
-  return ch;
-}
 
 // The sheet is 0.1 m or more outside this body.
 const Character& far_apart() {

@@ -18,12 +18,12 @@ using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::expect_error;
 using Eigen::Vector3d;
+using weft::capture::testing::stick_figure_skeleton;
 
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180;
 
-Skeleton stick_figure() { return weft::capture::testing::stick_figure_skeleton(); }
 
 const Dof& dof(const Skeleton& s, const std::string& name) {
   const int d = s.dof_index(name);
@@ -44,7 +44,7 @@ Vector3d moved(const Skeleton& s, const std::string& d, int end, const std::stri
 }  // namespace
 
 TEST(JointLimits, DefaultsBoundHipsSpineAndNeckAndLeaveTheRootFree) {
-  const Skeleton s = stick_figure();
+  const Skeleton s = stick_figure_skeleton();
   for (const char* j : {"l_hip", "r_hip", "spine", "chest", "neck", "head", "l_ankle", "r_clavicle", "l_wrist"})
     for (const char* a : {"_rx", "_ry", "_rz"}) {
       const Dof& d = dof(s, std::string(j) + a);
@@ -72,7 +72,7 @@ TEST(JointLimits, DefaultsBoundHipsSpineAndNeckAndLeaveTheRootFree) {
 }
 
 TEST(JointLimits, SignsAreTheDocumentedOnes) {
-  const Skeleton s = stick_figure();
+  const Skeleton s = stick_figure_skeleton();
   // Hip flexion (rx < 0) is the large one and brings the knee forward; extension back.
   EXPECT_LT(dof(s, "l_hip_rx").lower, -110 * kDeg);
   EXPECT_GT(moved(s, "l_hip_rx", -1, "l_knee").z(), 0.3);
@@ -96,7 +96,7 @@ TEST(JointLimits, ConfigOverridesTheDefaults) {
   const DefaultCharacterConfig c = parse_default_character_config(
       "name: x\njoint_limits:\n  l_hip: {ry: [-30, 20], rx: free}\n  l_knee: {rx: [0, 150]}\n", "/cfg/c.yaml");
   ASSERT_EQ(c.joint_limits.size(), 3u);
-  Skeleton s = stick_figure();
+  Skeleton s = stick_figure_skeleton();
   apply_dof_limits(s, c.joint_limits, "c.yaml");
   EXPECT_NEAR(dof(s, "l_hip_ry").lower, -30 * kDeg, 1e-12);
   EXPECT_NEAR(dof(s, "l_hip_ry").upper, 20 * kDeg, 1e-12);

@@ -18,10 +18,10 @@
 using namespace weft;
 using namespace weft::capture;
 using Eigen::Vector3d;
+using weft::capture::testing::stick_figure_skeleton;
 
 namespace {
 
-Skeleton stick_figure() { return weft::capture::testing::stick_figure_skeleton(); }
 
 // Every dof but the root's six.
 std::vector<int> non_root(const Skeleton& s) {
@@ -44,7 +44,7 @@ constexpr double kScale = 0.1;  // NetworkConfig::dof_scale's default
 }  // namespace
 
 TEST(PoseDofs, LimitedDofsStayInsideTheirLimitsForExtremeOutputs) {
-  const Skeleton s = stick_figure();
+  const Skeleton s = stick_figure_skeleton();
   const std::vector<int> free = non_root(s);
   Eigen::VectorXd rest = Eigen::VectorXd::Zero(s.num_dofs());
   const PoseDofs map(s, rest, free, kScale);
@@ -80,7 +80,7 @@ TEST(PoseDofs, LimitedDofsStayInsideTheirLimitsForExtremeOutputs) {
 }
 
 TEST(PoseDofs, ZeroIsTheRestPoseWithTheUnlimitedSlope) {
-  const Skeleton s = stick_figure();
+  const Skeleton s = stick_figure_skeleton();
   const std::vector<int> free = non_root(s);
   // A rest pose off the middle of the ranges: knees bent 0.3 rad in [−0.05, 2.6], a
   // hip flexed to −60° in [−130°, 40°].
@@ -111,7 +111,7 @@ TEST(PoseDofs, ZeroIsTheRestPoseWithTheUnlimitedSlope) {
 }
 
 TEST(PoseDofs, GradientsFlowAndMatchFiniteDifferences) {
-  const Skeleton s = stick_figure();
+  const Skeleton s = stick_figure_skeleton();
   const std::vector<int> free = non_root(s);
   const PoseDofs map(s, Eigen::VectorXd::Zero(s.num_dofs()), free, kScale, DType::F64);
   const int64_t F = static_cast<int64_t>(free.size());

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "capture/render/renderer.h"
+#include "tests/capture/box_mesh.h"
 #include "tests/capture/opencv_silhouette.h"
 #include "tests/capture/test_files.h"
 
@@ -28,15 +29,7 @@ TriangleMesh sphere(double radius, const Eigen::Vector3d& c, int rings, int segm
 
 // An axis-aligned box with half extents h around c.
 TriangleMesh box(const Eigen::Vector3d& c, const Eigen::Vector3d& h) {
-  TriangleMesh m;
-  m.V.resize(8, 3);
-  for (int k = 0; k < 8; ++k)
-    m.V.row(k) << c.x() + (k & 1 ? h.x() : -h.x()), c.y() + (k & 2 ? h.y() : -h.y()),
-        c.z() + (k & 4 ? h.z() : -h.z());
-  m.F.resize(12, 3);
-  m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6,
-      1, 3, 5, 3, 7, 5;
-  return m;
+  return weft::capture::testing::box_mesh(c - h, c + h);
 }
 
 // A quad p0 p1 p2 p3 (in order around it) with uv (0,1) (1,1) (1,0) (0,0): p0 is the

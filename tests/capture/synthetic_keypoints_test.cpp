@@ -9,11 +9,13 @@
 #include "capture/render/renderer.h"
 #include "capture/studio/studio_rig.h"
 #include "capture/studio/synthetic_keypoints.h"
+#include "tests/capture/box_mesh.h"
 #include "tests/capture/test_files.h"
 
 using namespace weft;
 using namespace weft::capture;
 using weft::capture::testing::ScratchDir;
+using weft::capture::testing::box_mesh;
 using weft::capture::testing::expect_error;
 
 namespace {
@@ -44,16 +46,6 @@ KeypointNoiseConfig exact() {
   c.occluded_dropout = 0;
   c.confidence_jitter = 0;
   return c;
-}
-
-TriangleMesh box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  TriangleMesh m;
-  m.V.resize(8, 3);
-  for (int k = 0; k < 8; ++k)
-    m.V.row(k) << (k & 1 ? hi.x() : lo.x()), (k & 2 ? hi.y() : lo.y()), (k & 4 ? hi.z() : lo.z());
-  m.F.resize(12, 3);
-  m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
-  return m;
 }
 
 RenderMesh draw(const TriangleMesh& mesh) {
@@ -152,7 +144,7 @@ TEST(SyntheticKeypoints, JointBehindTheTorsoIsOccludedJointFacingTheCameraIsVisi
     const std::vector<Camera> cams = studio_rig(rig);
     const Camera& front = cams[0];  // azimuth 0, at +z
     const Camera& back = cams[4];   // azimuth 180, at −z
-    const TriangleMesh torso = box(Eigen::Vector3d(-0.2, 0.8, -0.1) * u, Eigen::Vector3d(0.2, 1.4, 0.1) * u);
+    const TriangleMesh torso = box_mesh(Eigen::Vector3d(-0.2, 0.8, -0.1) * u, Eigen::Vector3d(0.2, 1.4, 0.1) * u);
     Vertices world = Vertices::Constant(kBody25Count, 3, kNaN);
     const int inside = 1, behind = 8, beside = 4;
     world.row(inside) << 0, 1.1 * u, 0.0;         // a joint 0.1 m under the front surface
