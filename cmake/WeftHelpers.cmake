@@ -51,6 +51,13 @@ function(weft_unity target)
   endif()
 endfunction()
 
+# weft_test_optimisation(TARGET): tests are compiled at -O1 in Release: their own code is
+# assertions and small fixtures, the code they test is the layers' (-O3), and -O3 on the
+# GoogleTest macros costs compile time that the run never gets back.
+function(weft_test_optimisation target)
+  set_target_properties(${target} PROPERTIES WEFT_TEST_CODE ON)  # read by weft_options
+endfunction()
+
 # weft_layer(NAME DEPS...): a shared library from every .cpp in the current folder.
 # Shared, so that ops registered by static initialisers (WEFT_REGISTER_OP) are always
 # loaded, whatever the executable happens to reference.
@@ -98,6 +105,7 @@ function(weft_test_folder layer)
         weft_precompile(${target} ${WEFT_PCH_COMMON} <gtest/gtest.h>)
       endif()
       weft_unity(${target})
+      weft_test_optimisation(${target})
       target_compile_definitions(${target} PRIVATE
         WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" WEFT_BINARY_DIR="${CMAKE_BINARY_DIR}")
       gtest_discover_tests(${target} TEST_PREFIX "${layer}." DISCOVERY_MODE PRE_TEST
