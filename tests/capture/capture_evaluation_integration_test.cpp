@@ -41,14 +41,19 @@ fs::path eval_scratch_root() { return weft::capture::testing::process_scratch("e
 // The tiny dataset (shared_fixture.h).
 fs::path tiny() { return weft::capture::testing::tiny_dataset(); }
 
-// A capture folder holding the dataset's ground truth for `frames`, every mesh, joint and
-// pivot moved by `offset` (character units).
-// `root_turn_rad` is added to the root chain's rotation about y (the meshes stay);
-// `cloth_turn_rad` turns the cloth about the vertical through its centroid.
-fs::path perfect_capture(const std::string& name, const std::vector<int>& frames,
-                         const Eigen::Vector3d& offset = Eigen::Vector3d::Zero(),
-                         const Eigen::Vector3d& cloth_offset = Eigen::Vector3d::Zero(), double root_turn_rad = 0,
-                         double cloth_turn_rad = 0) {
+// How a capture built from the ground truth is made wrong. Every field has its default:
+// a brace-initialised Eigen vector (`{}`) is left uninitialised, which is how a call with
+// `{}` for two offsets once read garbage and made this file's results vary from run to run.
+struct Perturbation {
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();        // every mesh, joint and pivot (character units)
+  Eigen::Vector3d cloth_offset = Eigen::Vector3d::Zero();  // the cloth alone (character units)
+  double root_turn_rad = 0;   // added to the root chain's rotation about y (the meshes stay)
+  double cloth_turn_rad = 0;  // turns the cloth about the vertical through its centroid
+};
+
+// A capture folder holding the dataset's ground truth for `frames`, changed by `change`.
+fs::path perfect_capture(const std::string& name, const std::vector<int>& frames, const Perturbation& change = {}) {
+  const auto& [offset, cloth_offset, root_turn_rad, cloth_turn_rad] = change;
   const DatasetInfo info = read_dataset_info(tiny().string());
   const Character ch = load_character(info.character);
   const Motion gt = read_motion((tiny() / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
@@ -210,7 +215,7 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
 }
 
 TEST(CaptureEvaluationIntegration, GroundTruthTranslationTakesBackAGlobalShift) {
-  const fs::path capture = perfect_capture("shifted", {1, 2, 3}, Eigen::Vector3d(0.1, 0, -0.05));
+  const fs::path capture = perfect_capture("shifted", {1, 2, 3}, {.offset = Eigen::Vector3d(0.1, 0, -0.05)});
   EvaluationOptions o = options(capture);
   o.view = "cam01";
   o.iou_every = 2;
@@ -240,7 +245,7 @@ TEST(CaptureEvaluationIntegration, RootRotationAndChamferTellATurnedPoseAndATurn
   // The root turned by 1 rad about y: a 57.3° root error in every frame, which a
   // root-relative MPJPE sees too; a skirt turned by 0.2 rad about its axis: a large vertex
   // error but a small surface (Chamfer) distance.
-  const CaptureEvaluation turned = evaluate_capture(options(perfect_capture("turned", {1, 2, 3}, {}, {}, 1.0, 0.2)));
+  const CaptureEvaluation turned = evaluate_capture(options(perfect_capture("turned", {1, 2, 3}, {.root_turn_rad = 1.0, .cloth_turn_rad = 0.2})));
   EXPECT_NEAR(turned.root_rotation_median_deg, 180 / std::numbers::pi, 1e-6);
   EXPECT_NEAR(turned.root_rotation_p95_deg, 180 / std::numbers::pi, 1e-6);
   EXPECT_EQ(turned.root_rotation_above_45, 1.0);
@@ -255,7 +260,7 @@ TEST(CaptureEvaluationIntegration, RootRotationAndChamferTellATurnedPoseAndATurn
 
 TEST(CaptureEvaluationIntegration, SkirtMovedIntoTheBodyPenetrates) {
   // The skirt alone moved 3 cm sideways: its vertices on that side go into the hips and legs.
-  const fs::path capture = perfect_capture("into_body", {3, 4}, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.03, 0, 0));
+  const fs::path capture = perfect_capture("into_body", {3, 4}, {.cloth_offset = Eigen::Vector3d(0.03, 0, 0)});
   const CaptureEvaluation e = evaluate_capture(options(capture));
   EXPECT_NEAR(e.cloth_error_mean_mm, 30.0, 1e-6);
   EXPECT_EQ(e.body_error_mean_mm, 0.0);
