@@ -73,6 +73,35 @@ function(weft_layer name)
   endif()
 endfunction()
 
+# weft_discover_suites(TARGET PREFIX LABEL): one ctest test per GoogleTest suite of TARGET,
+# named PREFIX<Suite> and running --gtest_filter=<Suite>.* (cmake/WeftGtestSuites.cmake says
+# why). Like gtest_discover_tests' PRE_TEST mode, ctest lists the suites when it starts and
+# the executable is newer than the list. One test: `TARGET --gtest_filter=Suite.Name`.
+function(weft_discover_suites target prefix label)
+  set(dir ${CMAKE_CURRENT_BINARY_DIR})
+  set(list_file ${dir}/${target}_suites.cmake)
+  set(script ${CMAKE_SOURCE_DIR}/cmake/WeftGtestSuites.cmake)
+  file(GENERATE OUTPUT ${dir}/${target}_suites_include.cmake CONTENT
+"if(NOT EXISTS [==[$<TARGET_FILE:${target}>]==])
+  add_test(${target}_NOT_BUILT ${target}_NOT_BUILT)
+  return()
+endif()
+if(NOT EXISTS [==[${list_file}]==] OR
+   NOT [==[${list_file}]==] IS_NEWER_THAN [==[$<TARGET_FILE:${target}>]==] OR
+   NOT [==[${list_file}]==] IS_NEWER_THAN [==[${script}]==])
+  set(EXE [==[$<TARGET_FILE:${target}>]==])
+  set(PREFIX [==[${prefix}]==])
+  set(LABEL [==[${label}]==])
+  set(WORKING_DIR [==[${dir}]==])
+  set(CTEST_FILE [==[${list_file}]==])
+  set(TIMEOUT_S 60)
+  include([==[${script}]==])
+endif()
+include([==[${list_file}]==])
+")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${dir}/${target}_suites_include.cmake)
+endfunction()
+
 # weft_test_folder(LAYER LIBS...): test executables from tests/LAYER/*.cpp, one per
 # label. Files ending in _gradcheck_test.cpp are labelled gradcheck,
 # _integration_test.cpp integration, any other *_test.cpp unit.
@@ -108,8 +137,12 @@ function(weft_test_folder layer)
       weft_test_optimisation(${target})
       target_compile_definitions(${target} PRIVATE
         WEFT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" WEFT_BINARY_DIR="${CMAKE_BINARY_DIR}")
-      gtest_discover_tests(${target} TEST_PREFIX "${layer}." DISCOVERY_MODE PRE_TEST
-        DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${label})
+      if(label STREQUAL "integration")  # long tests: one each, so that ctest -j spreads them
+        gtest_discover_tests(${target} TEST_PREFIX "${layer}." DISCOVERY_MODE PRE_TEST
+          DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${label})
+      else()
+        weft_discover_suites(${target} "${layer}." ${label})
+      endif()
     endif()
   endforeach()
 endfunction()
