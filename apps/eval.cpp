@@ -42,9 +42,11 @@ void run_eval(const capture::EvaluationOptions& o, const std::string& out) {
                e.cloth_error_mean_mm, e.cloth_error_p95_mm, e.cloth_chamfer_mm, e.body_error_mean_mm,
                e.body_error_p95_mm, e.mpjpe_mm, e.mpjpe_root_relative_mm, e.pivot_error_mm);
   spdlog::info("root rotation error: median {:.1f}°, p95 {:.1f}°, {:.1f} % of frames above 45°; heading (about the "
-               "vertical): median {:.1f}°, {:.1f} % above 45°",
+               "vertical): median {:.1f}°, {:.1f} % above 45°; tilt (pelvis pitch and roll): median {:.1f}°; trunk "
+               "direction (MidHip → Neck): median {:.1f}°",
                e.root_rotation_median_deg, e.root_rotation_p95_deg, 100 * e.root_rotation_above_45,
-               e.root_heading_median_deg, 100 * e.root_heading_above_45);
+               e.root_heading_median_deg, 100 * e.root_heading_above_45, e.root_tilt_median_deg,
+               e.trunk_direction_median_deg);
   for (const std::string& n : e.notes) spdlog::info("note: {}", n);
   capture::write_evaluation_report(e, out);
   spdlog::info("report: {}", (std::filesystem::path(out) / "report.html").string());

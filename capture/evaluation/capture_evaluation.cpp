@@ -211,7 +211,7 @@ void read_frames(EvaluationInputs& in, CaptureEvaluation& e) {
 struct Pooled {
   std::vector<double> cloth_distances, body_distances;  // for the 95th percentiles
   FrameMetricMeans means;
-  std::vector<double> root_rotation_deg, root_heading_deg;
+  std::vector<double> root_rotation_deg, root_heading_deg, root_tilt_deg, trunk_direction_deg;
   BalancePool balance, gt_balance;
   FrameMeasures penetration, gt_penetration;  // sums over frames (depth, vertices inside)
 };
@@ -257,6 +257,8 @@ Kept measure_frame(const EvaluationInputs& in, const EvaluationOptions& o, int k
   fm.pivot_error_mm = (cf.pivot - gt_pivot).norm() * mpu * 1e3;
   pool.root_rotation_deg.push_back(fm.root_rotation_error_deg);
   pool.root_heading_deg.push_back(fm.root_heading_error_deg);
+  pool.root_tilt_deg.push_back(fm.root_tilt_error_deg);
+  if (std::isfinite(fm.trunk_direction_error_deg)) pool.trunk_direction_deg.push_back(fm.trunk_direction_error_deg);
   pool.body_distances.insert(pool.body_distances.end(), fm.body_distances_mm.begin(), fm.body_distances_mm.end());
   pool.cloth_distances.insert(pool.cloth_distances.end(), fm.cloth_distances_mm.begin(), fm.cloth_distances_mm.end());
   fm.body_distances_mm.clear(), fm.cloth_distances_mm.clear();  // pooled: not kept per frame
@@ -316,6 +318,10 @@ void summarize(const EvaluationInputs& in, const Pooled& pool, CaptureEvaluation
   const RotationErrorSummary heading = summarize_rotation_errors(pool.root_heading_deg);
   e.root_heading_median_deg = heading.median_deg, e.root_heading_p95_deg = heading.p95_deg,
   e.root_heading_above_45 = heading.above_45;
+  const RotationErrorSummary tilt = summarize_rotation_errors(pool.root_tilt_deg);
+  e.root_tilt_median_deg = tilt.median_deg, e.root_tilt_p95_deg = tilt.p95_deg;
+  const RotationErrorSummary trunk = summarize_rotation_errors(pool.trunk_direction_deg);
+  e.trunk_direction_median_deg = trunk.median_deg, e.trunk_direction_p95_deg = trunk.p95_deg;
   if (e.has_cloth) {
     e.cloth_chamfer_mm = means.mean("cloth_chamfer_mm");
     e.cloth_error_mean_mm = means.mean("cloth_error_mean_mm");

@@ -98,6 +98,10 @@ struct CaptureEvaluation {
   // The same of the heading error (heading_error_deg: the turn about the vertical alone).
   double root_heading_median_deg = kNotMeasured, root_heading_p95_deg = kNotMeasured,
          root_heading_above_45 = kNotMeasured;
+  // The tilt error (tilt_error_deg: the rest of the rotation error, the pelvis's pitch and
+  // roll) and the trunk direction error (MidHip → Neck): median and 95th percentile.
+  double root_tilt_median_deg = kNotMeasured, root_tilt_p95_deg = kNotMeasured;
+  double trunk_direction_median_deg = kNotMeasured, trunk_direction_p95_deg = kNotMeasured;
   double seconds = 0;
 
   std::vector<EvaluationOverlay> overlays;

@@ -100,6 +100,8 @@ std::string CaptureEvaluation::to_json() const {
   s["root_heading_deg"] = {{"median", root_heading_median_deg},
                            {"p95", root_heading_p95_deg},
                            {"fraction_above_45", root_heading_above_45}};
+  s["root_tilt_deg"] = {{"median", root_tilt_median_deg}, {"p95", root_tilt_p95_deg}};
+  s["trunk_direction_deg"] = {{"median", trunk_direction_median_deg}, {"p95", trunk_direction_p95_deg}};
   json& p = j["per_frame"];
   std::vector<int> ids;
   json shifts = json::array(), ious = json::array();
@@ -204,6 +206,8 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   row("frames with the root rotation off by more than 45°", num(100 * e.root_rotation_above_45, 2), "", "%");
   row("heading error (the turn about the vertical), median", num(e.root_heading_median_deg, 2), "", "°");
   row("frames with the heading off by more than 45° (front/back)", num(100 * e.root_heading_above_45, 2), "", "%");
+  row("tilt error (the pelvis's pitch and roll), median", num(e.root_tilt_median_deg, 2), "", "°");
+  row("trunk direction error (MidHip → Neck), median", num(e.trunk_direction_median_deg, 2), "", "°");
   row("global translation error (pivot joint, before any shift)", num(e.pivot_error_mm, 2), "", "mm");
   h += "</table>\n<p>Definitions: docs/EVALUATION.md. The ground-truth column measures the dataset's own meshes "
        "the same way: the floor the data allows.</p>\n";

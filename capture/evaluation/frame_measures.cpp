@@ -128,6 +128,21 @@ double heading_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d
   return 2 * std::atan2(std::abs(q.y()), std::abs(q.w())) * 180 / std::numbers::pi;
 }
 
+double tilt_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth) {
+  // q = swing · twist (twist about y): the swing's angle is 2 atan2(|(x, z)|, |(w, y)|).
+  const Eigen::Quaterniond q(predicted * truth.transpose());
+  return 2 * std::atan2(std::hypot(q.x(), q.z()), std::hypot(q.w(), q.y())) * 180 / std::numbers::pi;
+}
+
+double trunk_direction_error_deg(const Vertices& predicted_body25, const Vertices& true_body25) {
+  constexpr int kNeck = 1, kMidHip = 8;
+  if (predicted_body25.rows() <= kMidHip || true_body25.rows() <= kMidHip) return kNotMeasured;
+  const Eigen::Vector3d p = (predicted_body25.row(kNeck) - predicted_body25.row(kMidHip)).transpose();
+  const Eigen::Vector3d t = (true_body25.row(kNeck) - true_body25.row(kMidHip)).transpose();
+  if (!p.allFinite() || !t.allFinite() || p.norm() == 0 || t.norm() == 0) return kNotMeasured;
+  return std::atan2(p.cross(t).norm(), p.dot(t)) * 180 / std::numbers::pi;
+}
+
 RotationErrorSummary summarize_rotation_errors(const std::vector<double>& errors_deg) {
   RotationErrorSummary s;
   if (errors_deg.empty()) return s;
@@ -148,6 +163,10 @@ const std::vector<FrameMetric>& frame_metrics() {
        &M::root_rotation_error_deg},
       {"root_heading_error_deg", "°", "the twist about the vertical of that rotation error: front/back confusion, "
        "without the pelvis's tilt", &M::root_heading_error_deg},
+      {"root_tilt_error_deg", "°", "the rest of that rotation error, its swing away from the vertical: the pelvis's "
+       "pitch and roll", &M::root_tilt_error_deg},
+      {"trunk_direction_error_deg", "°", "angle between the directions MidHip → Neck (BODY_25), which keypoints "
+       "determine", &M::trunk_direction_error_deg},
       {"body_error_mean_mm", "mm", "mean body vertex distance", &M::body_error_mean_mm},
       {"body_error_p95_mm", "mm", "95th percentile of the body vertex distances", &M::body_error_p95_mm},
       {"cloth_error_mean_mm", "mm", "mean cloth vertex distance", &M::cloth_error_mean_mm},
@@ -242,7 +261,9 @@ void measure_geometry(const Character& ch, const PosedFrame& p, const PosedFrame
   if (p.root_rotation && t.root_rotation) {
     m.root_rotation_error_deg = rotation_error_deg(*p.root_rotation, *t.root_rotation);
     m.root_heading_error_deg = heading_error_deg(*p.root_rotation, *t.root_rotation);
+    m.root_tilt_error_deg = tilt_error_deg(*p.root_rotation, *t.root_rotation);
   }
+  m.trunk_direction_error_deg = trunk_direction_error_deg(p.body25, t.body25);
   m.body_distances_mm = vertex_distances_mm(p.body, t.body, mpu);
   m.body_error_mean_mm = mean_of(m.body_distances_mm);
   m.body_error_p95_mm = quantile(m.body_distances_mm, 0.95);

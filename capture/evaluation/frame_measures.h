@@ -68,6 +68,18 @@ double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3
 // spine and hips above and below it can make up for it).
 double heading_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
 
+// The tilt error (degrees, 0..180): the swing of predicted · truthᵀ, what is left of the
+// rotation error once its twist about the vertical (the heading error) is taken out: the
+// pelvis's pitch and roll. A rotation about the vertical counts not at all, a tilt about a
+// horizontal axis whole.
+double tilt_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
+
+// The trunk direction error (degrees, 0..180): the angle between the predicted and the
+// true direction from BODY_25's MidHip (8) to its Neck (1), which the keypoints determine
+// whatever the pelvis and the lumbar spine share of a lean. NaN when either keypoint is
+// not mapped in either skeleton (rows with NaN, or fewer than 9 rows).
+double trunk_direction_error_deg(const Vertices& predicted_body25, const Vertices& true_body25);
+
 // Root orientation errors over predictions: the median, the 95th percentile and the
 // fraction above 45° (front/back and side confusions); NaN for none.
 struct RotationErrorSummary {
@@ -137,7 +149,8 @@ struct FrameMeasures {
   double pivot_error_mm = kNotMeasured;
   double mpjpe_mm = kNotMeasured, mpjpe_root_relative_mm = kNotMeasured;
   double root_rotation_error_deg = kNotMeasured;
-  double root_heading_error_deg = kNotMeasured;
+  double root_heading_error_deg = kNotMeasured, root_tilt_error_deg = kNotMeasured;
+  double trunk_direction_error_deg = kNotMeasured;
   double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
   double cloth_error_mean_mm = kNotMeasured, cloth_error_p95_mm = kNotMeasured, cloth_chamfer_mm = kNotMeasured;
   double penetration_mean_mm = kNotMeasured;      // over the cloth vertices inside (0 when none is)

@@ -196,6 +196,8 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
   for (const char* key : {"mean_cm", "mean_mm", "max_mm", "fraction_inside"})
     EXPECT_TRUE(s["penetration"][key].is_number()) << key;
   for (const char* key : {"amv", "rv", "sv"}) EXPECT_TRUE(s["iou"][key].is_number()) << key;
+  for (const char* key : {"root_rotation_deg", "root_heading_deg", "root_tilt_deg", "trunk_direction_deg"})
+    EXPECT_TRUE(s[key]["median"].is_number()) << key;
   EXPECT_TRUE(s["cloth_error_mm"]["p95"].is_number());
   EXPECT_TRUE(s["body_error_mm"]["mean"].is_number());
   EXPECT_TRUE(s["mpjpe_mm"].is_number());
@@ -209,6 +211,7 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
   EXPECT_EQ(j["per_frame"]["iou_per_view"][0].size(), 8u);
   const std::string html = slurp(report / "report.html");
   for (const char* part : {"AMVIoU", "RVIoU", "SVIoU", "MPJPE", "out-of-balance force, max", "penetration depth",
+                           "tilt error", "trunk direction error",
                            "<svg", "overlay_worst_", "overlay_median_"})
     EXPECT_NE(html.find(part), std::string::npos) << part;
   for (const auto& o : j["overlays"]) EXPECT_TRUE(fs::exists(report / o["file"].get<std::string>()));
@@ -242,6 +245,8 @@ TEST(CaptureEvaluationIntegration, RootRotationAndChamferTellATurnedPoseAndATurn
   EXPECT_EQ(perfect.root_rotation_above_45, 0.0);
   EXPECT_NEAR(perfect.mpjpe_root_relative_mm, 0.0, 1e-6);
   EXPECT_NEAR(perfect.cloth_chamfer_mm, 0.0, 1e-9);
+  EXPECT_NEAR(perfect.root_tilt_median_deg, 0.0, 1e-6);
+  EXPECT_NEAR(perfect.trunk_direction_median_deg, 0.0, 1e-6);
   // The root turned by 1 rad about y: a 57.3° root error in every frame, which a
   // root-relative MPJPE sees too; a skirt turned by 0.2 rad about its axis: a large vertex
   // error but a small surface (Chamfer) distance.
@@ -249,6 +254,11 @@ TEST(CaptureEvaluationIntegration, RootRotationAndChamferTellATurnedPoseAndATurn
   EXPECT_NEAR(turned.root_rotation_median_deg, 180 / std::numbers::pi, 1e-6);
   EXPECT_NEAR(turned.root_rotation_p95_deg, 180 / std::numbers::pi, 1e-6);
   EXPECT_EQ(turned.root_rotation_above_45, 1.0);
+  // The turn is about the pelvis's own y axis, which the ground truth's pose leans a little
+  // off the vertical: nearly all heading, a little tilt (measured 57.294° and 0.49°).
+  EXPECT_NEAR(turned.root_heading_median_deg, 180 / std::numbers::pi, 0.01);
+  EXPECT_LT(turned.root_tilt_median_deg, 1.0);
+  EXPECT_GT(turned.trunk_direction_median_deg, 0.0);
   EXPECT_GT(turned.mpjpe_root_relative_mm, 100);
   EXPECT_NEAR(turned.body_error_mean_mm, 0.0, 1e-9);  // the meshes did not move
   EXPECT_GT(turned.cloth_error_mean_mm, 20);

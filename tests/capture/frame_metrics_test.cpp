@@ -148,6 +148,46 @@ std::vector<MetricCase> metric_cases() {
                  EXPECT_NEAR(heading(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY())), 180, 1e-6);
                  EXPECT_TRUE(std::isnan(geometry([](PosedFrame& p) { p.root_rotation.reset(); }).root_heading_error_deg));
                }});
+  c.push_back({"root_tilt_error_deg", "tilted 40° forward: 40; turned 30° about the vertical: 0; both: 40", [] {
+                 const auto tilt = [](const Eigen::Matrix3d& turn) {
+                   return geometry([&](PosedFrame& p) { p.root_rotation = turn; }).root_tilt_error_deg;
+                 };
+                 const double forward = 40 * std::numbers::pi / 180;
+                 const Eigen::Matrix3d pitch = Eigen::AngleAxisd(forward, Eigen::Vector3d::UnitX()).toRotationMatrix();
+                 const Eigen::Matrix3d yaw =
+                     Eigen::AngleAxisd(std::numbers::pi / 6, Eigen::Vector3d::UnitY()).toRotationMatrix();
+                 EXPECT_NEAR(tilt(pitch), 40, 1e-9);
+                 EXPECT_NEAR(tilt(yaw), 0, 1e-9);
+                 EXPECT_NEAR(tilt(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY()).toRotationMatrix()), 0,
+                             1e-6);
+                 // Turned first, then tilted: the swing–twist split gives each part back.
+                 EXPECT_NEAR(tilt(pitch * yaw), 40, 1e-9);
+                 EXPECT_NEAR(geometry([&](PosedFrame& p) { p.root_rotation = pitch * yaw; }).root_heading_error_deg, 30,
+                             1e-9);
+                 EXPECT_TRUE(std::isnan(geometry([](PosedFrame& p) { p.root_rotation.reset(); }).root_tilt_error_deg));
+               }});
+  c.push_back({"trunk_direction_error_deg", "the neck leaned 45° forward over the mid-hip: 45; moved whole: 0; "
+               "no neck: not measured", [] {
+                 const auto skeleton = [](PosedFrame& p) {  // BODY_25 rows: 1 Neck, 8 MidHip, the rest unmapped
+                   p.body25 = Vertices::Constant(25, 3, kNotMeasured);
+                   p.body25.row(8) << 0, 1, 0;
+                   p.body25.row(1) << 0, 1.5, 0;
+                 };
+                 const auto trunk = [&](const std::function<void(PosedFrame&)>& change) {
+                   PosedFrame t = truth_of(far_apart());
+                   skeleton(t);
+                   PosedFrame p = t;
+                   change(p);
+                   FrameMeasures m;
+                   measure_geometry(far_apart(), p, t, true, m);
+                   return m.trunk_direction_error_deg;
+                 };
+                 EXPECT_NEAR(trunk([](PosedFrame& p) { p.body25.row(1) << 0, 1.5, 0.5; }), 45, 1e-9);
+                 EXPECT_NEAR(trunk([](PosedFrame& p) { p.body25 = moved(p.body25, {0.3, -0.2, 0.1}); }), 0, 1e-6);
+                 EXPECT_NEAR(trunk([](PosedFrame& p) { p.body25.row(1) << 0, 0.5, 0; }), 180, 1e-9);
+                 EXPECT_TRUE(std::isnan(trunk([](PosedFrame& p) { p.body25.row(1).setConstant(kNotMeasured); })));
+                 EXPECT_TRUE(std::isnan(geometry([](PosedFrame&) {}).trunk_direction_error_deg));  // 3 rows only
+               }});
   c.push_back({"body_error_mean_mm", "the body 5 mm to the side", [] {
                  EXPECT_NEAR(geometry([](PosedFrame& p) { p.body = moved(p.body, {0.005, 0, 0}); }).body_error_mean_mm,
                              5, 1e-9);
