@@ -165,7 +165,7 @@ const std::vector<FrameMetric>& frame_metrics() {
        "without the pelvis's tilt", &M::root_heading_error_deg},
       {"root_tilt_error_deg", "°", "the rest of that rotation error, its swing away from the vertical: the pelvis's "
        "pitch and roll", &M::root_tilt_error_deg},
-      {"trunk_direction_error_deg", "°", "angle between the directions MidHip → Neck (BODY_25), which keypoints "
+      {"trunk_direction_error_deg", "°", "angle between the directions MidHip → Neck (BODY_25), which 3D keypoints "
        "determine", &M::trunk_direction_error_deg},
       {"body_error_mean_mm", "mm", "mean body vertex distance", &M::body_error_mean_mm},
       {"body_error_p95_mm", "mm", "95th percentile of the body vertex distances", &M::body_error_p95_mm},

@@ -75,9 +75,10 @@ double heading_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d
 double tilt_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
 
 // The trunk direction error (degrees, 0..180): the angle between the predicted and the
-// true direction from BODY_25's MidHip (8) to its Neck (1), which the keypoints determine
-// whatever the pelvis and the lumbar spine share of a lean. NaN when either keypoint is
-// not mapped in either skeleton (rows with NaN, or fewer than 9 rows).
+// true direction from BODY_25's MidHip (8) to its Neck (1), which 3D keypoints determine
+// whatever the pelvis and the lumbar spine share of a lean (one view's 2D keypoints: across
+// the image only). NaN when either keypoint is not mapped in either skeleton (rows with
+// NaN, or fewer than 9 rows).
 double trunk_direction_error_deg(const Vertices& predicted_body25, const Vertices& true_body25);
 
 // Root orientation errors over predictions: the median, the 95th percentile and the
