@@ -23,7 +23,7 @@ struct TubeGarmentOptions {
 struct TubeGarment {
   TriangleMesh mesh;          // rings × segments vertices, outward-facing triangles
   std::vector<int> anchors;   // the top ring (cloth vertex indices)
-  Eigen::Vector2d centre;     // the tube's axis (x, z)
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // the tube's axis (x, z)
   double min_distance = 0;    // smallest unsigned distance to the body (units)
   int inside = 0;             // garment vertices inside the body (0 when generation succeeded)
 };

@@ -21,8 +21,9 @@ struct Joint {
   std::string name;
   JointType type = JointType::revolute;
   int parent = -1;         // index of the parent joint, smaller than this joint's; -1: root
-  Eigen::Vector3d offset;  // from the parent's frame, before `scale` (character units)
-  Eigen::Vector3d axis;    // unit rotation / translation axis in the joint's frame
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // from the parent's frame, before `scale` (character units)
+  // Unit rotation / translation axis in the joint's frame; left zero, the skeleton's check fails.
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
   double scale = 1.0;      // multiplies offset
 };
 
@@ -31,7 +32,7 @@ struct Joint {
 struct Marker {
   std::string name;
   int joint = -1;
-  Eigen::Vector3d offset;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   double size = 0;          // display radius (character units)
   Eigen::Vector3d color{1, 1, 1};
 };

@@ -38,7 +38,7 @@ struct PoseParametrisation {
   std::vector<int> root_dofs;  // dofs driving the root chain: held at the rest pose
   std::vector<int> free_dofs;  // the others, in skeleton order: regressed
   int pivot_joint = 0;         // the root chain's last joint
-  Eigen::Vector3d pivot;       // its rest-pose position p0 (character units)
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // its rest-pose position p0 (character units)
 };
 // The root chain: from the root joint, every following joint placed at its parent's
 // origin (zero offset) and the only child of it.
