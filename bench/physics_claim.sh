@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The experiment behind the paper's physics claim, with the pose taken out of it:
 #
-#   bench/physics_claim.sh [--quick] OUT
+#   bench/physics_claim.sh [--quick] [--reevaluate] OUT
 #
 # 1. A dataset with 3D ground truth (configs/synth/physics_claim.yaml: 72 frames, the
 #    coarse skirt, 4 views; the test split is the motion's last 18 frames).
@@ -17,28 +17,55 @@
 #    the paired predictions (IoU: difference in points) with a 95 % bootstrap interval over
 #    test frames, and each seed's ratio, in OUT/physics_claim.json.
 # --quick: 3 seeds, short stages (about 15 minutes on 2 cores); without it 3 seeds and
-# stages 4x longer. Reuses OUT/data and OUT/warmup when present. Needs a build (scripts/build.sh).
+# stages 4x longer. Reuses OUT/data and OUT/warmup when present, and skips an arm whose
+# evaluation exists. --reevaluate: trains nothing; evaluates the warm start and every arm of
+# OUT again with this build's evaluator (after a change to a metric), then the statistics.
+# Needs a build (scripts/build.sh).
 set -euo pipefail
 quick=0
+reevaluate=0
 out=""
 for a in "$@"; do
   case "$a" in
     --quick) quick=1 ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
-    -*) echo "physics_claim: unknown option $a (expected --quick)" >&2; exit 2 ;;
+    --reevaluate) reevaluate=1 ;;
+    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    -*) echo "physics_claim: unknown option $a (expected --quick or --reevaluate)" >&2; exit 2 ;;
     *) out=$a ;;
   esac
 done
-[ -n "$out" ] || { echo "usage: bench/physics_claim.sh [--quick] OUT" >&2; exit 2; }
+[ -n "$out" ] || { echo "usage: bench/physics_claim.sh [--quick] [--reevaluate] OUT" >&2; exit 2; }
 root=$(cd "$(dirname "$0")/.." && pwd)
 weft=${WEFT_BUILD_DIR:-$root/build}/apps/weft
 [ -x "$weft" ] || { echo "physics_claim: $weft is not built (run scripts/build.sh)" >&2; exit 2; }
+if ((reevaluate)) && ! { [ -f "$out/data/dataset.yaml" ] && [ -f "$out/warmup/model.safetensors" ]; }; then
+  echo "physics_claim: --reevaluate needs a finished experiment in $out (no data/dataset.yaml or warmup/model.safetensors)" >&2
+  exit 2
+fi
 mkdir -p "$out/configs" "$out/arms"
 out=$(cd "$out" && pwd)
 seeds=(1 2 3)
 if ((quick)); then warm_steps=300; physics_steps=60; else warm_steps=1200; physics_steps=240; fi
 start=$(date +%s)
 log() { echo "physics_claim [$(($(date +%s) - start)) s]: $*"; }
+
+# evaluate NAME RUN: RUN's model on the test split, into RUN/evaluation_test.json (and NAME's log).
+evaluate() {
+  "$weft" train --config "$out/configs/$1.yaml" --data "$out/data" --out "$2" --evaluate test >>"$2.log" 2>&1
+}
+
+if ((reevaluate)); then
+  log "re-evaluating the warm start"
+  evaluate warmup "$out/warmup"
+  for seed in "${seeds[@]}"; do
+    for arm in physics arap_only physics_no_cloth_arap; do
+      run="$out/arms/$arm-$seed"
+      [ -f "$run/model.safetensors" ] || { echo "physics_claim: $run has no model.safetensors: run without --reevaluate" >&2; exit 2; }
+      log "re-evaluating $arm, seed $seed"
+      evaluate "$arm-$seed" "$run"
+    done
+  done
+fi
 
 if [ ! -f "$out/data/dataset.yaml" ]; then
   log "synth: configs/synth/physics_claim.yaml"
@@ -70,8 +97,7 @@ if [ ! -f "$out/warmup/model.safetensors" ]; then
   log "warm start: $warm_steps steps"
   rm -rf "$out/warmup"
   "$weft" train --config "$out/configs/warmup.yaml" --data "$out/data" --out "$out/warmup" >"$out/warmup.log" 2>&1
-  "$weft" train --config "$out/configs/warmup.yaml" --data "$out/data" --out "$out/warmup" --evaluate test \
-    >>"$out/warmup.log" 2>&1
+  evaluate warmup "$out/warmup"
 fi
 
 stage="batch_size: 8, lr: 2.0e-4, final_lr_fraction: 1, landmarks: 1, silhouette: 1, attachment: 10"
@@ -89,8 +115,7 @@ for seed in "${seeds[@]}"; do
     rm -rf "$run"
     "$weft" train --config "$out/configs/$arm-$seed.yaml" --data "$out/data" --out "$run" \
       --init "$out/warmup/model.safetensors" >"$run.log" 2>&1
-    "$weft" train --config "$out/configs/$arm-$seed.yaml" --data "$out/data" --out "$run" --evaluate test \
-      >>"$run.log" 2>&1
+    evaluate "$arm-$seed" "$run"
   done
 done
 
