@@ -19,7 +19,8 @@
 # --quick: 3 seeds, short stages (about 15 minutes on 2 cores); without it 3 seeds and
 # stages 4x longer. Reuses OUT/data and OUT/warmup when present, and skips an arm whose
 # evaluation exists. --reevaluate: trains nothing; evaluates the warm start and every arm of
-# OUT again with this build's evaluator (after a change to a metric), then the statistics.
+# OUT again with this build's evaluator (after a change to a metric), then the statistics
+# (whose wall time is then the re-evaluation's).
 # Needs a build (scripts/build.sh).
 set -euo pipefail
 quick=0
@@ -29,7 +30,7 @@ for a in "$@"; do
   case "$a" in
     --quick) quick=1 ;;
     --reevaluate) reevaluate=1 ;;
-    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
     -*) echo "physics_claim: unknown option $a (expected --quick or --reevaluate)" >&2; exit 2 ;;
     *) out=$a ;;
   esac
