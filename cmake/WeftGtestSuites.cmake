@@ -3,8 +3,9 @@
 # executable lists its tests (--gtest_list_tests) and this writes CTEST_FILE, one add_test
 # per suite with --gtest_filter=Suite.*, when the file is older than the executable.
 #
-# Why suites and not single tests: a capture or gradient-check test executable loads ~180
-# shared libraries (OpenCV's image codecs bring GDAL, gdcm, FFmpeg, ...); starting it costs
+# Why suites and not single tests: a capture or gradient-check test executable loads 180-290
+# shared libraries (OpenCV's image codecs bring GDAL and gdcm, its video I/O FFmpeg and
+# GStreamer); starting it costs
 # 0.3-0.4 s of CPU, while its 188 gradient checks run in 0.1 s and its 233 unit tests in 5 s
 # all told. A process per test was most of the unit and gradcheck labels' time.
 #
