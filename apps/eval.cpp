@@ -47,6 +47,17 @@ void run_eval(const capture::EvaluationOptions& o, const std::string& out) {
                e.root_rotation_median_deg, e.root_rotation_p95_deg, 100 * e.root_rotation_above_45,
                e.root_heading_median_deg, 100 * e.root_heading_above_45, e.root_tilt_median_deg,
                e.trunk_direction_median_deg);
+  spdlog::info("joint error: PA-MPJPE {:.2f} mm; root-relative split along the input camera: depth {:.2f} mm, image "
+               "plane {:.2f} mm (mean sizes)",
+               e.pa_mpjpe_mm, e.mpjpe_depth_mm, e.mpjpe_image_plane_mm);
+  if (e.training_set)
+    spdlog::info("against the training set ({} frames × {} views): nearest training pose {:.1f} mm PA; mean training "
+                 "pose {:.1f} mm root-relative ({:.1f} PA); 2D retrieval {:.1f} mm root-relative ({:.1f} PA); this "
+                 "capture {:.1f} ({:.1f} PA)",
+                 e.training_set->training_frames, e.training_set->training_views, e.training_set->nearest_pose_pa_mm,
+                 e.training_set->mean_pose_root_relative_mm, e.training_set->mean_pose_pa_mm,
+                 e.training_set->nearest_2d_root_relative_mm, e.training_set->nearest_2d_pa_mm,
+                 e.mpjpe_root_relative_mm, e.pa_mpjpe_mm);
   for (const std::string& n : e.notes) spdlog::info("note: {}", n);
   capture::write_evaluation_report(e, out);
   spdlog::info("report: {}", (std::filesystem::path(out) / "report.html").string());
@@ -88,6 +99,13 @@ void add_eval_command(CLI::App& app) {
                   "Synth config whose simulation section gives the cloth material for the out-of-balance force "
                   "(default: the dataset's own, dataset.yaml's simulation section; without either the force is not "
                   "measured)");
+  cmd->add_option("--training-data", o->training_data,
+                  "A dataset the model trained on (a `weft synth` folder): measure how far each test pose lies from "
+                  "the nearest training pose, and score two baselines on the same frames, the mean training pose and "
+                  "the training pose whose 2D keypoints are nearest to the input view's detections "
+                  "(docs/EVALUATION.md, \"Against the training set\")");
+  cmd->add_option("--training-split", o->training_split, "The split of --training-data to compare with")
+      ->default_val("train");
   cmd->callback([o, out] { run_eval(*o, *out); });
 }
 

@@ -214,6 +214,8 @@ struct Pooled {
   std::vector<double> root_rotation_deg, root_heading_deg, root_tilt_deg, trunk_direction_deg;
   BalancePool balance, gt_balance;
   FrameMeasures penetration, gt_penetration;  // sums over frames (depth, vertices inside)
+  std::vector<MeasuredMean> joint_root_relative, joint_pa;  // per BODY_25 row
+  std::vector<TestFramePose> test_poses;                   // for the training-set comparison
 };
 
 // Every measure of capture frame k (in id order); prev2 and prev1 are the frames before
@@ -252,8 +254,22 @@ Kept measure_frame(const EvaluationInputs& in, const EvaluationOptions& o, int k
   predicted.root_rotation = pred_pose.joints[in.param.pivot_joint].linear();
   truth.body = now.gt_body, truth.cloth = now.gt_cloth, truth.body25 = gt_pose.body25, truth.pivot = gt_pivot;
   truth.root_rotation = gt_pose.joints[in.param.pivot_joint].linear();
+  const Camera& input_camera = in.camera_of(f, e.view);
+  truth.view_rotation = input_camera.R;
   FrameMeasures& fm = fe.measures;
   measure_geometry(ch, predicted, truth, !std::binary_search(in.failed.begin(), in.failed.end(), f), fm);
+  for (auto [means, errors] : {std::pair{&pool.joint_root_relative, &fm.joint_errors_root_relative_mm},
+                               std::pair{&pool.joint_pa, &fm.joint_errors_pa_mm}}) {
+    if (means->size() < errors->size()) means->resize(errors->size());
+    for (size_t j = 0; j < errors->size(); ++j) (*means)[j].add((*errors)[j]);
+  }
+  if (!o.training_data.empty()) {
+    TestFramePose tp;
+    tp.id = f, tp.body25 = gt_pose.body25, tp.pivot = gt_pivot, tp.root_rotation = *truth.root_rotation;
+    tp.camera = input_camera;
+    tp.detections = read_dataset_keypoints(dataset_keypoints_path(in.info, f, e.view));
+    pool.test_poses.push_back(std::move(tp));
+  }
   fm.pivot_error_mm = (cf.pivot - gt_pivot).norm() * mpu * 1e3;
   pool.root_rotation_deg.push_back(fm.root_rotation_error_deg);
   pool.root_heading_deg.push_back(fm.root_heading_error_deg);
@@ -312,6 +328,11 @@ void summarize(const EvaluationInputs& in, const Pooled& pool, CaptureEvaluation
   e.body_error_p95_mm = quantile(pool.body_distances, 0.95);
   e.mpjpe_mm = means.mean("mpjpe_mm");
   e.mpjpe_root_relative_mm = means.mean("mpjpe_root_relative_mm");
+  e.pa_mpjpe_mm = means.mean("pa_mpjpe_mm");
+  e.mpjpe_depth_mm = means.mean("mpjpe_depth_mm");
+  e.mpjpe_image_plane_mm = means.mean("mpjpe_image_plane_mm");
+  for (const MeasuredMean& m : pool.joint_root_relative) e.joint_error_root_relative_mm.push_back(m.value());
+  for (const MeasuredMean& m : pool.joint_pa) e.joint_error_pa_mm.push_back(m.value());
   const RotationErrorSummary rotation = summarize_rotation_errors(pool.root_rotation_deg);
   e.root_rotation_median_deg = rotation.median_deg, e.root_rotation_p95_deg = rotation.p95_deg,
   e.root_rotation_above_45 = rotation.above_45;
@@ -410,6 +431,12 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     if (progress) progress(k + 1, total);
   }
   summarize(in, pool, e);
+  if (!o.training_data.empty()) {
+    spdlog::info("comparing the {} test poses with the training set {} (split '{}')", pool.test_poses.size(),
+                 o.training_data, o.training_split);
+    const TrainingPoses training = read_training_poses(o.training_data, o.training_split, in.character);
+    e.training_set = compare_with_training_set(training, pool.test_poses, in.character.metres_per_unit);
+  }
   draw_overlays(in, e);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;

@@ -26,10 +26,12 @@
 #include <Eigen/Core>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "capture/evaluation/frame_measures.h"
+#include "capture/evaluation/training_set_comparison.h"
 
 namespace weft::capture {
 
@@ -40,6 +42,8 @@ struct EvaluationOptions {
   bool gt_translation = false;
   int iou_every = 1;         // IoU on every N-th captured frame (in frame-id order), N ≥ 1
   std::string synth_config;  // a synth config whose simulation section overrides the dataset's ("" keeps it)
+  std::string training_data;            // a dataset to compare the test poses with ("" none; training_set_comparison.h)
+  std::string training_split = "train";  // its split
 };
 
 
@@ -91,6 +95,12 @@ struct CaptureEvaluation {
   double body_error_mean_mm = kNotMeasured, body_error_p95_mm = kNotMeasured;
   double mpjpe_mm = kNotMeasured, pivot_error_mm = kNotMeasured;
   double mpjpe_root_relative_mm = kNotMeasured, cloth_chamfer_mm = kNotMeasured;
+  // PA-MPJPE, and the root-relative joint error split into the input camera's depth and
+  // its image plane (mean sizes of the components), means over frames.
+  double pa_mpjpe_mm = kNotMeasured, mpjpe_depth_mm = kNotMeasured, mpjpe_image_plane_mm = kNotMeasured;
+  // Per BODY_25 keypoint (kBody25Names order; NaN: unmapped): the mean over frames of its
+  // root-relative error and its error after the Procrustes alignment.
+  std::vector<double> joint_error_root_relative_mm, joint_error_pa_mm;
   // The root (pivot joint) orientation's error over frames: median, 95th percentile, and
   // the fraction of frames above 45° (front/back or side confusions).
   double root_rotation_median_deg = kNotMeasured, root_rotation_p95_deg = kNotMeasured,
@@ -105,6 +115,10 @@ struct CaptureEvaluation {
   double seconds = 0;
 
   std::vector<EvaluationOverlay> overlays;
+
+  // With options.training_data: the test poses against the training set and the baselines
+  // (frames in the order of `frames`).
+  std::optional<TrainingSetComparison> training_set;
 
   // metrics.json: the options, the summary and per-frame arrays (null where not measured).
   std::string to_json() const;

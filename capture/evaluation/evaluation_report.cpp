@@ -42,6 +42,34 @@ json distribution_json(const Distribution& d) {
 std::string num(double v, int decimals) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : "—"; }
 std::string sci(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "—"; }
 
+// The frames in three groups by their distance to the nearest training pose (nearest
+// third first): that distance, the capture's root-relative MPJPE and PA-MPJPE, and the 2D
+// retrieval's root-relative error, means per group.
+struct DistanceGroup {
+  int frames = 0;
+  double nearest_pose_pa_mm = 0, mpjpe_root_relative_mm = 0, pa_mpjpe_mm = 0, nearest_2d_root_relative_mm = 0;
+};
+std::vector<DistanceGroup> groups_by_training_distance(const CaptureEvaluation& e) {
+  if (!e.training_set || e.training_set->frames.size() != e.frames.size() || e.frames.size() < 3) return {};
+  const std::vector<TrainingSetFrame>& t = e.training_set->frames;
+  std::vector<size_t> order(t.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return t[a].nearest_pose_pa_mm < t[b].nearest_pose_pa_mm; });
+  std::vector<DistanceGroup> groups;
+  for (int g = 0; g < 3; ++g) {
+    const size_t first = order.size() * g / 3, last = order.size() * (g + 1) / 3;
+    MeasuredMean d, rr, pa, ret;
+    for (size_t k = first; k < last; ++k) {
+      const size_t i = order[k];
+      d.add(t[i].nearest_pose_pa_mm), rr.add(e.frames[i].measures.mpjpe_root_relative_mm);
+      pa.add(e.frames[i].measures.pa_mpjpe_mm), ret.add(t[i].nearest_2d_root_relative_mm);
+    }
+    groups.push_back({int(last - first), d.value(), rr.value(), pa.value(), ret.value()});
+  }
+  return groups;
+}
+
 }  // namespace
 
 std::string CaptureEvaluation::to_json() const {
@@ -93,6 +121,14 @@ std::string CaptureEvaluation::to_json() const {
   s["cloth_chamfer_mm"] = cloth_chamfer_mm;
   s["mpjpe_mm"] = mpjpe_mm;
   s["mpjpe_root_relative_mm"] = mpjpe_root_relative_mm;
+  s["pa_mpjpe_mm"] = pa_mpjpe_mm;
+  s["mpjpe_root_relative_split_mm"] = {{"depth", mpjpe_depth_mm}, {"image_plane", mpjpe_image_plane_mm}};
+  json joints = json::array();
+  for (size_t j = 0; j < joint_error_root_relative_mm.size(); ++j)
+    joints.push_back({{"keypoint", j < kBody25Names.size() ? kBody25Names[j] : "?"},
+                      {"root_relative_mm", joint_error_root_relative_mm[j]},
+                      {"pa_mm", j < joint_error_pa_mm.size() ? joint_error_pa_mm[j] : kNotMeasured}});
+  s["per_joint"] = joints;
   s["pivot_error_mm"] = pivot_error_mm;
   s["root_rotation_deg"] = {{"median", root_rotation_median_deg},
                             {"p95", root_rotation_p95_deg},
@@ -123,6 +159,43 @@ std::string CaptureEvaluation::to_json() const {
   for (const EvaluationOverlay& o : overlays)
     ov.push_back({{"label", o.label}, {"id", o.id}, {"ranked_by", o.ranked_by}, {"file", overlay_file(o)}});
   j["overlays"] = ov;
+  if (training_set) {
+    const TrainingSetComparison& t = *training_set;
+    json& c = j["training_set"];
+    c["data"] = t.data, c["split"] = t.split, c["frames"] = t.training_frames, c["views"] = t.training_views;
+    c["summary"] = {{"nearest_pose_pa_mm", t.nearest_pose_pa_mm},
+                    {"mean_pose_root_relative_mm", t.mean_pose_root_relative_mm},
+                    {"mean_pose_pa_mm", t.mean_pose_pa_mm},
+                    {"nearest_2d_root_relative_mm", t.nearest_2d_root_relative_mm},
+                    {"nearest_2d_pa_mm", t.nearest_2d_pa_mm}};
+    json groups = json::array();
+    for (const DistanceGroup& g : groups_by_training_distance(*this))
+      groups.push_back({{"frames", g.frames},
+                        {"nearest_pose_pa_mm", g.nearest_pose_pa_mm},
+                        {"mpjpe_root_relative_mm", g.mpjpe_root_relative_mm},
+                        {"pa_mpjpe_mm", g.pa_mpjpe_mm},
+                        {"nearest_2d_root_relative_mm", g.nearest_2d_root_relative_mm}});
+    c["by_distance_third"] = groups;
+    json& pf = c["per_frame"];
+    std::vector<double> nearest, mean_rr, mean_pa, ret_rr, ret_pa;
+    std::vector<int> nearest_frame, ret_frame;
+    std::vector<std::string> ret_view;
+    for (const TrainingSetFrame& f : t.frames) {
+      nearest.push_back(f.nearest_pose_pa_mm), nearest_frame.push_back(f.nearest_pose_frame);
+      mean_rr.push_back(f.mean_pose_root_relative_mm), mean_pa.push_back(f.mean_pose_pa_mm);
+      ret_rr.push_back(f.nearest_2d_root_relative_mm), ret_pa.push_back(f.nearest_2d_pa_mm);
+      ret_frame.push_back(f.nearest_2d_frame), ret_view.push_back(f.nearest_2d_view);
+    }
+    const auto nulls = [](const std::vector<double>& v) {
+      json a = json::array();
+      for (double x : v) a.push_back(std::isfinite(x) ? json(x) : json(nullptr));
+      return a;
+    };
+    pf["nearest_pose_pa_mm"] = nulls(nearest), pf["nearest_pose_frame"] = nearest_frame;
+    pf["mean_pose_root_relative_mm"] = nulls(mean_rr), pf["mean_pose_pa_mm"] = nulls(mean_pa);
+    pf["nearest_2d_root_relative_mm"] = nulls(ret_rr), pf["nearest_2d_pa_mm"] = nulls(ret_pa);
+    pf["nearest_2d_frame"] = ret_frame, pf["nearest_2d_view"] = ret_view;
+  }
   return j.dump(1) + "\n";
 }
 
@@ -201,6 +274,10 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   row("cloth Chamfer distance", num(e.cloth_chamfer_mm, 2), "", "mm");
   row("MPJPE (mapped BODY_25 joints)", num(e.mpjpe_mm, 2), "", "mm");
   row("MPJPE, root-relative", num(e.mpjpe_root_relative_mm, 2), "", "mm");
+  row("PA-MPJPE (after a similarity Procrustes alignment)", num(e.pa_mpjpe_mm, 2), "", "mm");
+  row("root-relative joint error along the input camera's axis (depth), mean size", num(e.mpjpe_depth_mm, 2), "",
+      "mm");
+  row("root-relative joint error across it (image plane), mean size", num(e.mpjpe_image_plane_mm, 2), "", "mm");
   row("root rotation error, median", num(e.root_rotation_median_deg, 2), "", "°");
   row("root rotation error, 95th percentile", num(e.root_rotation_p95_deg, 2), "", "°");
   row("frames with the root rotation off by more than 45°", num(100 * e.root_rotation_above_45, 2), "", "%");
@@ -221,6 +298,11 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   h += svg_line_plot("Joint and global translation error", "mm", ids,
                      {{"MPJPE", col([](const auto& f) { return f.measures.mpjpe_mm; }), "#2ca02c"},
                       {"pivot", col([](const auto& f) { return f.measures.pivot_error_mm; }), "#9467bd"}});
+  h += svg_line_plot("Root-relative joint error and its parts", "mm", ids,
+                     {{"root-relative", col([](const auto& f) { return f.measures.mpjpe_root_relative_mm; }), "#2ca02c"},
+                      {"PA-MPJPE", col([](const auto& f) { return f.measures.pa_mpjpe_mm; }), "#17becf"},
+                      {"depth (input camera)", col([](const auto& f) { return f.measures.mpjpe_depth_mm; }), "#d62728"},
+                      {"image plane", col([](const auto& f) { return f.measures.mpjpe_image_plane_mm; }), "#ff7f0e"}});
   h += svg_line_plot("Penetration depth", "mm", ids,
                      {{"mean", col([](const auto& f) { return f.measures.penetration_mean_mm; }), "#d62728"},
                       {"max", col([](const auto& f) { return f.measures.penetration_max_mm; }), "#ff7f0e"},
@@ -236,6 +318,51 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
                      {{"AMV", col([](const auto& f) { return f.measures.amv_iou; }), "#2ca02c", true},
                       {"RV", col([](const auto& f) { return f.measures.rv_iou; }), "#17becf", true},
                       {"SV", col([](const auto& f) { return f.measures.sv_iou; }), "#bcbd22", true}});
+
+  if (!e.joint_error_root_relative_mm.empty()) {
+    h += "<h2>Per joint</h2>\n<p>Mean over frames of each BODY_25 keypoint's error (— unmapped in the "
+         "skeleton).</p>\n<table><tr><th>keypoint</th><th>root-relative mm</th><th>PA mm</th></tr>\n";
+    for (size_t j = 0; j < e.joint_error_root_relative_mm.size(); ++j)
+      h += fmt::format("<tr><td>{} {}</td><td>{}</td><td>{}</td></tr>\n", j,
+                       j < kBody25Names.size() ? kBody25Names[j] : "?", num(e.joint_error_root_relative_mm[j], 1),
+                       num(j < e.joint_error_pa_mm.size() ? e.joint_error_pa_mm[j] : kNotMeasured, 1));
+    h += "</table>\n";
+  }
+  if (e.training_set) {
+    const TrainingSetComparison& t = *e.training_set;
+    h += fmt::format("<h2>Against the training set</h2>\n<p><code>{}</code>, split '{}': {} frames × {} views. "
+                     "Definitions: docs/EVALUATION.md.</p>\n",
+                     html_escape(t.data), html_escape(t.split), t.training_frames, t.training_views);
+    h += "<table><tr><th>pose</th><th>root-relative MPJPE mm</th><th>PA-MPJPE mm</th></tr>\n";
+    h += fmt::format("<tr><td>this capture</td><td>{}</td><td>{}</td></tr>\n", num(e.mpjpe_root_relative_mm, 1),
+                     num(e.pa_mpjpe_mm, 1));
+    h += fmt::format("<tr><td>the mean training pose (true heading)</td><td>{}</td><td>{}</td></tr>\n",
+                     num(t.mean_pose_root_relative_mm, 1), num(t.mean_pose_pa_mm, 1));
+    h += fmt::format("<tr><td>the training pose nearest in 2D (input view's keypoints)</td><td>{}</td><td>{}</td></tr>\n",
+                     num(t.nearest_2d_root_relative_mm, 1), num(t.nearest_2d_pa_mm, 1));
+    h += fmt::format("<tr><td>the nearest training pose in 3D (the data's floor)</td><td>—</td><td>{}</td></tr>\n",
+                     num(t.nearest_pose_pa_mm, 1));
+    h += "</table>\n<p>The frames by their distance to the nearest training pose, in thirds:</p>\n<table><tr>"
+         "<th>third</th><th>frames</th><th>nearest training pose, PA mm</th><th>capture root-relative mm</th>"
+         "<th>capture PA mm</th><th>2D retrieval root-relative mm</th></tr>\n";
+    const std::vector<DistanceGroup> groups = groups_by_training_distance(e);
+    for (size_t g = 0; g < groups.size(); ++g)
+      h += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                       g == 0 ? "nearest" : g == 1 ? "middle" : "farthest", groups[g].frames,
+                       num(groups[g].nearest_pose_pa_mm, 1), num(groups[g].mpjpe_root_relative_mm, 1),
+                       num(groups[g].pa_mpjpe_mm, 1), num(groups[g].nearest_2d_root_relative_mm, 1));
+    h += "</table>\n";
+    const auto tcol = [&](double TrainingSetFrame::*v) {
+      std::vector<double> out;
+      for (const TrainingSetFrame& f : t.frames) out.push_back(f.*v);
+      return out;
+    };
+    h += svg_line_plot("Root-relative MPJPE against the baselines", "mm", ids,
+                       {{"capture", col([](const auto& f) { return f.measures.mpjpe_root_relative_mm; }), "#2ca02c"},
+                        {"2D retrieval", tcol(&TrainingSetFrame::nearest_2d_root_relative_mm), "#9467bd"},
+                        {"mean training pose", tcol(&TrainingSetFrame::mean_pose_root_relative_mm), "#7f7f7f"},
+                        {"nearest training pose (PA)", tcol(&TrainingSetFrame::nearest_pose_pa_mm), "#d62728"}});
+  }
 
   h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
        "outline white) beside the ground truth drawn the same way (right).</p>\n";

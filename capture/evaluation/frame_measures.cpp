@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <numbers>
 #include <cmath>
@@ -117,6 +119,52 @@ std::vector<double> silhouette_ious(const Character& ch, const Vertices& body, c
   return iou;
 }
 
+std::vector<double> joint_distances_mm(const Vertices& a, const Vertices& b, double mpu) {
+  WEFT_CHECK(a.rows() == b.rows(), "joint_distances_mm: ", a.rows(), " and ", b.rows(), " rows");
+  std::vector<double> d(a.rows(), kNotMeasured);
+  for (int i = 0; i < a.rows(); ++i)
+    if (a.row(i).allFinite() && b.row(i).allFinite()) d[i] = (a.row(i) - b.row(i)).norm() * mpu * 1e3;
+  return d;
+}
+
+Vertices procrustes_aligned(const Vertices& predicted, const Vertices& truth) {
+  WEFT_CHECK(predicted.rows() == truth.rows(), "procrustes_aligned: ", predicted.rows(), " and ", truth.rows(),
+             " rows");
+  std::vector<int> rows;
+  for (int i = 0; i < predicted.rows(); ++i)
+    if (predicted.row(i).allFinite() && truth.row(i).allFinite()) rows.push_back(i);
+  Vertices out = Vertices::Constant(predicted.rows(), 3, kNotMeasured);
+  if (rows.size() < 3) return out;
+  Eigen::Matrix3Xd src(3, rows.size()), dst(3, rows.size());
+  for (size_t k = 0; k < rows.size(); ++k)
+    src.col(k) = predicted.row(rows[k]).transpose(), dst.col(k) = truth.row(rows[k]).transpose();
+  const Eigen::Matrix4d T = Eigen::umeyama(src, dst, true);
+  for (int i : rows)
+    out.row(i) = (T.topLeftCorner<3, 3>() * predicted.row(i).transpose() + T.topRightCorner<3, 1>()).transpose();
+  return out;
+}
+
+ViewErrorSplit view_error_split(const Vertices& p, const Vertices& t, const Eigen::Matrix3d& R, double mpu) {
+  WEFT_CHECK(p.rows() == t.rows(), "view_error_split: ", p.rows(), " and ", t.rows(), " rows");
+  MeasuredMean depth, plane;
+  for (int i = 0; i < p.rows(); ++i) {
+    if (!p.row(i).allFinite() || !t.row(i).allFinite()) continue;
+    const Eigen::Vector3d e = R * (p.row(i) - t.row(i)).transpose() * mpu * 1e3;
+    depth.add(std::abs(e.z()));
+    plane.add(e.head<2>().norm());
+  }
+  return {depth.value(), plane.value()};
+}
+
+Eigen::Matrix3d heading_rotation(const Eigen::Matrix3d& rotation) {
+  // Swing–twist about y: the twist is (w, 0, y, 0) normalised; (0, 0, 0, 0) only for a
+  // half-turn about a horizontal axis, whose heading is then taken as none.
+  const Eigen::Quaterniond q(rotation);
+  const double n = std::hypot(q.w(), q.y());
+  if (n < 1e-12) return Eigen::Matrix3d::Identity();
+  return Eigen::Quaterniond(q.w() / n, 0, q.y() / n, 0).toRotationMatrix();
+}
+
 double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth) {
   return Eigen::AngleAxisd(predicted.transpose() * truth).angle() * 180 / std::numbers::pi;
 }
@@ -159,6 +207,12 @@ const std::vector<FrameMetric>& frame_metrics() {
       {"pivot_error_mm", "mm", "distance of the pivot joint (the global translation's error)", &M::pivot_error_mm},
       {"mpjpe_mm", "mm", "mean joint error over the mapped BODY_25 keypoints", &M::mpjpe_mm},
       {"mpjpe_root_relative_mm", "mm", "the same with both pivots at the origin", &M::mpjpe_root_relative_mm},
+      {"pa_mpjpe_mm", "mm", "the same after the similarity (scale, rotation, translation) that best aligns the "
+       "predicted keypoints to the true ones (PA-MPJPE)", &M::pa_mpjpe_mm},
+      {"mpjpe_depth_mm", "mm", "root-relative joint error along the input camera's axis (depth), mean size",
+       &M::mpjpe_depth_mm},
+      {"mpjpe_image_plane_mm", "mm", "root-relative joint error across the input camera's axis (image plane), mean "
+       "size", &M::mpjpe_image_plane_mm},
       {"root_rotation_error_deg", "°", "geodesic angle between the pivot joint's global rotations",
        &M::root_rotation_error_deg},
       {"root_heading_error_deg", "°", "the twist about the vertical of that rotation error: front/back confusion, "
@@ -256,8 +310,16 @@ void measure_geometry(const Character& ch, const PosedFrame& p, const PosedFrame
   const double mpu = ch.metres_per_unit;
   m.pivot_error_mm = (p.pivot - t.pivot).norm() * mpu * 1e3;
   m.mpjpe_mm = mean_joint_error_mm(p.body25, t.body25, mpu);
-  m.mpjpe_root_relative_mm = mean_joint_error_mm(p.body25.rowwise() - p.pivot.transpose(),
-                                                 t.body25.rowwise() - t.pivot.transpose(), mpu);
+  const Vertices p_rel = p.body25.rowwise() - p.pivot.transpose(), t_rel = t.body25.rowwise() - t.pivot.transpose();
+  m.mpjpe_root_relative_mm = mean_joint_error_mm(p_rel, t_rel, mpu);
+  const Vertices aligned = procrustes_aligned(p.body25, t.body25);
+  m.pa_mpjpe_mm = mean_joint_error_mm(aligned, t.body25, mpu);
+  m.joint_errors_root_relative_mm = joint_distances_mm(p_rel, t_rel, mpu);
+  m.joint_errors_pa_mm = joint_distances_mm(aligned, t.body25, mpu);
+  if (t.view_rotation) {
+    const ViewErrorSplit split = view_error_split(p_rel, t_rel, *t.view_rotation, mpu);
+    m.mpjpe_depth_mm = split.depth_mm, m.mpjpe_image_plane_mm = split.image_plane_mm;
+  }
   if (p.root_rotation && t.root_rotation) {
     m.root_rotation_error_deg = rotation_error_deg(*p.root_rotation, *t.root_rotation);
     m.root_heading_error_deg = heading_error_deg(*p.root_rotation, *t.root_rotation);

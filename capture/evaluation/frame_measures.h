@@ -58,6 +58,29 @@ Penetration cloth_penetration(const Character& character, const Vertices& body, 
 std::vector<double> cloth_signed_distances_mm(const Character& character, const Vertices& body,
                                               const Vertices& cloth);
 
+// The distance (mm) of each BODY_25 row (NaN where either row is not finite).
+std::vector<double> joint_distances_mm(const Vertices& predicted_body25, const Vertices& true_body25,
+                                       double metres_per_unit);
+
+// The prediction aligned to the truth by the similarity (scale, rotation, translation)
+// that minimises the squared distance over the rows finite in both (Umeyama 1991, Eigen's
+// umeyama): the alignment of PA-MPJPE. Rows not finite in both stay NaN; fewer than three
+// such rows give all NaN.
+Vertices procrustes_aligned(const Vertices& predicted, const Vertices& truth);
+
+// Root-relative joint errors (pred_i − pred_pivot) − (true_i − true_pivot) seen from a camera
+// of world → camera rotation R: the mean size of their component along the camera's axis
+// (depth) and across it (image plane), mm, over the rows finite in both.
+struct ViewErrorSplit {
+  double depth_mm = kNotMeasured;
+  double image_plane_mm = kNotMeasured;
+};
+ViewErrorSplit view_error_split(const Vertices& predicted_root_relative, const Vertices& true_root_relative,
+                                const Eigen::Matrix3d& world_to_camera, double metres_per_unit);
+
+// The twist about the world's vertical (+y) of a rotation: its heading alone.
+Eigen::Matrix3d heading_rotation(const Eigen::Matrix3d& rotation);
+
 // The geodesic angle (degrees, 0..180) between two rotations: the root orientation's error.
 double rotation_error_deg(const Eigen::Matrix3d& predicted, const Eigen::Matrix3d& truth);
 
@@ -141,6 +164,9 @@ struct PosedFrame {
   Vertices body25;                                  // BODY_25 keypoints of the posed skeleton; NaN rows: not measured
   Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // the pivot joint's position
   std::optional<Eigen::Matrix3d> root_rotation;     // the pivot joint's global rotation; none: not measured
+  // The truth's: the input view's world → camera rotation, which splits the root-relative
+  // joint error into the camera's depth and its image plane; none: not split.
+  std::optional<Eigen::Matrix3d> view_rotation;
 };
 
 // Every measure of one predicted frame (NaN: not measured). The fields that are metrics
@@ -149,6 +175,8 @@ struct PosedFrame {
 struct FrameMeasures {
   double pivot_error_mm = kNotMeasured;
   double mpjpe_mm = kNotMeasured, mpjpe_root_relative_mm = kNotMeasured;
+  double pa_mpjpe_mm = kNotMeasured;  // after a similarity Procrustes alignment
+  double mpjpe_depth_mm = kNotMeasured, mpjpe_image_plane_mm = kNotMeasured;  // root-relative, input camera
   double root_rotation_error_deg = kNotMeasured;
   double root_heading_error_deg = kNotMeasured, root_tilt_error_deg = kNotMeasured;
   double trunk_direction_error_deg = kNotMeasured;
@@ -170,6 +198,8 @@ struct FrameMeasures {
   int64_t cloth_vertices = 0, penetrating_vertices = 0;
   double penetration_depth_sum_mm = 0;
   std::vector<double> body_distances_mm, cloth_distances_mm;  // per vertex (cloth: empty when not measured)
+  // Per BODY_25 row (NaN: not measured): root-relative and after the Procrustes alignment.
+  std::vector<double> joint_errors_root_relative_mm, joint_errors_pa_mm;
 };
 
 // One per-frame metric: its name (the key in metrics.json and in the split evaluation's

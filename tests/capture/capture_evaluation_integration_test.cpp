@@ -350,12 +350,40 @@ TEST(CaptureEvaluationIntegration, BadCaptureFoldersAreErrorsNamingTheFile) {
   expect_error([&] { evaluate_capture(options(capture)); }, {"capture.json", "missing"});
 }
 
+TEST(CaptureEvaluationIntegration, TrainingSetComparisonFindsATrainingFrameItself) {
+  // A perfect capture of two of the tiny dataset's training frames, compared with that
+  // training split: each test pose is a training pose (nearest at 0 mm, itself), the
+  // capture has no error, and the mean training pose does not fit exactly.
+  const DatasetInfo info = read_dataset_info(tiny().string());
+  const std::vector<int>& train = info.splits.at("train");
+  ASSERT_GE(train.size(), 2u);
+  const std::vector<int> frames = {train[0], train[1]};
+  EvaluationOptions o = options(perfect_capture("train_frames", frames));
+  o.training_data = tiny().string();
+  const CaptureEvaluation e = evaluate_capture(o);
+  ASSERT_TRUE(e.training_set);
+  ASSERT_EQ(e.training_set->frames.size(), 2u);
+  EXPECT_EQ(e.training_set->training_frames, int(train.size()));
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_NEAR(e.training_set->frames[k].nearest_pose_pa_mm, 0, 1e-6);
+    EXPECT_EQ(e.training_set->frames[k].nearest_pose_frame, frames[k]);
+  }
+  EXPECT_NEAR(e.pa_mpjpe_mm, 0, 1e-6);
+  EXPECT_NEAR(e.mpjpe_depth_mm, 0, 1e-9);
+  ASSERT_EQ(e.joint_error_pa_mm.size(), size_t(kBody25Count));
+  EXPECT_GT(e.training_set->mean_pose_root_relative_mm, 1);
+  EXPECT_TRUE(std::isfinite(e.training_set->nearest_2d_root_relative_mm));
+  // A split the training data does not have: one error naming the file and the split.
+  o.training_split = "nope";
+  expect_error([&] { evaluate_capture(o); }, {"dataset.yaml", "no split 'nope'"});
+}
+
 TEST(CaptureEvaluationIntegration, CommandWritesTheReport) {
   const fs::path capture = perfect_capture("command", {0, 1, 2, 3});
   const fs::path report = eval_scratch_root() / "report_command";
   const std::string cmd = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " + capture.string() +
                           " --data " + tiny().string() + " --out " + report.string() +
-                          " --view cam05 --iou-every 2 > " +
+                          " --view cam05 --iou-every 2 --training-data " + tiny().string() + " > " +
                           (eval_scratch_root() / "eval.out").string() + " 2>&1";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(eval_scratch_root() / "eval.out");
@@ -363,8 +391,13 @@ TEST(CaptureEvaluationIntegration, CommandWritesTheReport) {
   EXPECT_EQ(j["view"], "cam05");
   EXPECT_EQ(j["summary"]["iou"]["frames"], 2);
   EXPECT_TRUE(fs::exists(report / "report.html"));
+  EXPECT_TRUE(j["summary"]["pa_mpjpe_mm"].is_number());
+  EXPECT_EQ(j["summary"]["per_joint"].size(), size_t(kBody25Count));
+  EXPECT_EQ(j["training_set"]["per_frame"]["nearest_pose_pa_mm"].size(), 4u);
+  EXPECT_NE(slurp(report / "report.html").find("Against the training set"), std::string::npos);
   const std::string log = slurp(eval_scratch_root() / "eval.out");
   EXPECT_NE(log.find("AMVIoU"), std::string::npos) << log;
+  EXPECT_NE(log.find("against the training set"), std::string::npos) << log;
   // A missing prediction folder: one error naming it, and no report written.
   const fs::path nothing = eval_scratch_root() / "report_nothing";
   const std::string bad = std::string(WEFT_BINARY_DIR) + "/apps/weft eval --prediction " +

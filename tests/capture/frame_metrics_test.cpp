@@ -124,6 +124,70 @@ std::vector<MetricCase> metric_cases() {
                  EXPECT_NEAR(m.mpjpe_root_relative_mm, 10, 1e-9);
                  EXPECT_GT(m.mpjpe_mm, 300);
                }});
+  c.push_back({"pa_mpjpe_mm", "scaled ×1.5, turned 40° and moved whole is 0; one of 4 keypoints off is not", [] {
+                 // Four keypoints (three are collinear-free but a tetrahedron pins every axis).
+                 const auto with4 = [](PosedFrame& f) {
+                   f.body25.conservativeResize(4, 3);
+                   f.body25.row(3) << 0, 1.2, 0.3;
+                 };
+                 const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+                 PosedFrame t = truth_of(far_apart());
+                 with4(t);
+                 PosedFrame p = t;
+                 p.body25 = ((1.5 * R * t.body25.transpose()).colwise() + Eigen::Vector3d(0.3, -0.1, 2)).transpose();
+                 FrameMeasures m;
+                 measure_geometry(far_apart(), p, t, true, m);
+                 EXPECT_NEAR(m.pa_mpjpe_mm, 0, 1e-6);
+                 EXPECT_GT(m.mpjpe_root_relative_mm, 100);
+                 ASSERT_EQ(m.joint_errors_pa_mm.size(), 4u);
+                 for (double e : m.joint_errors_pa_mm) EXPECT_NEAR(e, 0, 1e-6);
+                 // One keypoint 4 cm off: the alignment spreads the error over the keypoints
+                 // and lowers its sum of squares (the quantity it minimises) below the
+                 // unaligned 40² mm², so the aligned RMS is under 20 mm, but not to 0. (The
+                 // mean of distances may exceed the unaligned 10 mm: spread is not removed.)
+                 p = t;
+                 p.body25(3, 2) += 0.04;
+                 FrameMeasures one;
+                 measure_geometry(far_apart(), p, t, true, one);
+                 EXPECT_NEAR(one.mpjpe_root_relative_mm, 10, 1e-9);
+                 double squares = 0;
+                 for (double e : one.joint_errors_pa_mm) squares += e * e;
+                 EXPECT_LT(squares, 40.0 * 40.0 - 1);
+                 EXPECT_GT(one.pa_mpjpe_mm, 1);
+                 EXPECT_LT(one.pa_mpjpe_mm, 20);
+                 p.body25.row(0).setConstant(kNotMeasured);
+                 measure_geometry(far_apart(), p, t, true, one);
+                 EXPECT_TRUE(std::isnan(one.joint_errors_pa_mm[0]));
+                 // Three rows left of which one is off: still fitted, and two rows are too few.
+                 EXPECT_TRUE(std::isfinite(one.pa_mpjpe_mm));
+                 p.body25.row(1).setConstant(kNotMeasured);
+                 measure_geometry(far_apart(), p, t, true, one);
+                 EXPECT_TRUE(std::isnan(one.pa_mpjpe_mm));
+               }});
+  static const auto split = [](const Eigen::Matrix3d& world_to_camera) {
+    PosedFrame t = truth_of(far_apart());
+    t.view_rotation = world_to_camera;
+    PosedFrame p = t;
+    p.body25(0, 2) += 0.03;  // the first keypoint 3 cm along world z
+    p.body25(1, 0) += 0.06;  // the second 6 cm along world x
+    FrameMeasures m;
+    measure_geometry(far_apart(), p, t, true, m);
+    return m;
+  };
+  c.push_back({"mpjpe_depth_mm", "a camera looking along world z: a 3 cm error along z is depth; no camera: none", [] {
+                 EXPECT_NEAR(split(Eigen::Matrix3d::Identity()).mpjpe_depth_mm, 10, 1e-9);
+                 // A camera looking along world x (turned 90° about y): the 6 cm error is depth.
+                 EXPECT_NEAR(split(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY()).toRotationMatrix())
+                                 .mpjpe_depth_mm,
+                             20, 1e-9);
+                 EXPECT_TRUE(std::isnan(geometry([](PosedFrame&) {}).mpjpe_depth_mm));
+               }});
+  c.push_back({"mpjpe_image_plane_mm", "the same cameras: the other error is across the image", [] {
+                 EXPECT_NEAR(split(Eigen::Matrix3d::Identity()).mpjpe_image_plane_mm, 20, 1e-9);
+                 EXPECT_NEAR(split(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY()).toRotationMatrix())
+                                 .mpjpe_image_plane_mm,
+                             10, 1e-9);
+               }});
   c.push_back({"root_rotation_error_deg", "turned 30° about the vertical; 180° for front/back", [] {
                  EXPECT_NEAR(geometry([](PosedFrame& p) {
                                p.root_rotation = Eigen::AngleAxisd(std::numbers::pi / 6, Eigen::Vector3d::UnitY())
@@ -356,6 +420,15 @@ TEST(FrameMetrics, EveryCaseNamesAMetricAndNamesAreUnique) {
   std::set<std::string> names;
   for (const FrameMetric& m : frame_metrics()) EXPECT_TRUE(names.insert(m.name).second) << m.name << " twice";
   for (const MetricCase& c : metric_cases()) EXPECT_TRUE(names.count(c.metric)) << c.metric << " is not a metric";
+}
+
+TEST(FrameMetrics, HeadingRotationKeepsTheTurnAboutTheVerticalAlone) {
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_TRUE(heading_rotation(turn * tilt).isApprox(turn, 1e-12));
+  EXPECT_TRUE(heading_rotation(tilt).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+  EXPECT_NEAR(heading_error_deg(heading_rotation(turn * tilt), Eigen::Matrix3d::Identity()), 0.8 * 180 / std::numbers::pi,
+              1e-9);
 }
 
 TEST(FrameMetrics, MeansOverFramesLeaveOutWhatWasNotMeasured) {
