@@ -1,0 +1,99 @@
+// Is a clip's forward pelvis in its source, or made by the retargeting? (issue 38, decision
+// b). For every frame of a synth dataset made from a BVH clip, this compares the source's
+// own pelvis (the BVH root joint) and trunk (root → neck joint) with the retargeted
+// character's (the pivot joint of gt/pose.motion, and BODY_25 MidHip → Neck):
+//   tilt  = the swing of the joint's rotation away from the vertical, relative to its zero
+//           (BVH) or rest (character) pose: the pelvis's pitch and roll, degrees;
+//   trunk = the angle of the root → neck direction from the vertical, degrees;
+//   lumbar share = how much of the trunk's lean the spine above the pelvis takes, per frame
+//           (trunk − tilt) / trunk where the trunk leans 10° or more (Tafazzol et al. 2014:
+//           about 0.7 early in forward bending, 0.57 late).
+// Usage: bench_pelvis_tilt DATASET BVH_FILE START_S [ROOT_JOINT NECK_JOINT]
+//   e.g. bench_pelvis_tilt /tmp/unseen /usr/share/assimp/models/BVH/01_03.bvh 1.0 Hips Neck
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "capture/character/character.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/evaluation/frame_measures.h"
+#include "capture/model/capture_networks.h"
+#include "capture/motion/bvh.h"
+#include "graph/error.h"
+
+using namespace weft;
+using namespace weft::capture;
+
+namespace {
+
+double deg(double rad) { return rad * 180 / std::numbers::pi; }
+double angle_from_vertical_deg(const Eigen::Vector3d& v) {
+  return deg(std::atan2(Eigen::Vector2d(v.x(), v.z()).norm(), v.y()));
+}
+
+void summary(const char* what, const std::vector<double>& v) {
+  std::printf("%-44s median %6.1f   p5 %6.1f   p95 %6.1f   (%zu frames)\n", what, quantile(v, 0.5), quantile(v, 0.05),
+              quantile(v, 0.95), v.size());
+}
+
+int run(int argc, char** argv) {
+  WEFT_CHECK(argc == 4 || argc == 6, "usage: bench_pelvis_tilt DATASET BVH_FILE START_S [ROOT_JOINT NECK_JOINT]");
+  const std::string data = argv[1], bvh_path = argv[2];
+  const double start_s = std::stod(argv[3]);
+  const std::string root_name = argc == 6 ? argv[4] : "Hips", neck_name = argc == 6 ? argv[5] : "Neck";
+  const DatasetInfo info = read_dataset_info(data);
+  const Character ch = load_character(info.character);
+  const Motion gt = read_motion((std::filesystem::path(data) / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
+  const PoseParametrisation param = pose_parametrisation(ch);
+  const Eigen::Matrix3d pivot_rest = pose_character(ch, ch.rest_dofs).joints[param.pivot_joint].linear();
+  const BvhMotion bvh = read_bvh(bvh_path);
+  int root = -1, neck = -1;
+  for (int j = 0; j < int(bvh.joints.size()); ++j) {
+    if (bvh.joints[j].name == root_name) root = j;
+    if (bvh.joints[j].name == neck_name) neck = j;
+  }
+  WEFT_CHECK(root >= 0 && neck >= 0, bvh_path, ": no joint '", root_name, "' or '", neck_name, "'");
+
+  std::vector<double> src_tilt, src_trunk, src_share, chr_tilt, chr_trunk, chr_share;
+  for (int f = 0; f < gt.num_frames(); ++f) {
+    const BvhTransforms T = bvh_global_transforms_at(bvh, start_s + f / info.fps);
+    const Eigen::Matrix3d R = T[root].linear();
+    const double s_tilt = tilt_error_deg(R, Eigen::Matrix3d::Identity());
+    const double s_trunk = angle_from_vertical_deg(T[neck].translation() - T[root].translation());
+    src_tilt.push_back(s_tilt), src_trunk.push_back(s_trunk);
+    if (s_trunk >= 10) src_share.push_back((s_trunk - s_tilt) / s_trunk);
+
+    const PosedCharacter p = pose_character(ch, gt.dofs.row(f).transpose());
+    const double c_tilt = tilt_error_deg(p.joints[param.pivot_joint].linear() * pivot_rest.transpose(),
+                                         Eigen::Matrix3d::Identity());
+    const double c_trunk = angle_from_vertical_deg((p.body25.row(1) - p.body25.row(8)).transpose());
+    chr_tilt.push_back(c_tilt), chr_trunk.push_back(c_trunk);
+    if (c_trunk >= 10) chr_share.push_back((c_trunk - c_tilt) / c_trunk);
+  }
+  std::printf("%s (%s from %.2f s) against %s\n", bvh_path.c_str(), root_name.c_str(), start_s, data.c_str());
+  summary("source: pelvis tilt (deg)", src_tilt);
+  summary("source: trunk lean, root -> neck (deg)", src_trunk);
+  summary("source: lumbar share (trunk >= 10 deg)", src_share);
+  summary("character: pelvis tilt (deg)", chr_tilt);
+  summary("character: trunk lean, MidHip -> Neck (deg)", chr_trunk);
+  summary("character: lumbar share (trunk >= 10 deg)", chr_share);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_pelvis_tilt: %s\n", e.what());
+    return 1;
+  }
+}
