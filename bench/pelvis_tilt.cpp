@@ -1,15 +1,16 @@
 // Is a clip's forward pelvis in its source, or made by the retargeting? (issue 38, decision
-// b). For every frame of a synth dataset made from a BVH clip, this compares the source's
-// own pelvis (the BVH root joint) and trunk (root → neck joint) with the retargeted
-// character's (the pivot joint of gt/pose.motion, and BODY_25 MidHip → Neck):
+// b). The clip is retargeted onto the character at 30 fps as `weft synth` does, and every
+// frame compares the source's own pelvis (the BVH root joint) and trunk (root → neck
+// joint) with the retargeted character's (its pivot joint, and BODY_25 MidHip → Neck):
 //   tilt  = the swing of the joint's rotation away from the vertical, relative to its zero
 //           (BVH) or rest (character) pose: the pelvis's pitch and roll, degrees;
 //   trunk = the angle of the root → neck direction from the vertical, degrees;
 //   lumbar share = how much of the trunk's lean the spine above the pelvis takes, per frame
 //           (trunk − tilt) / trunk where the trunk leans 10° or more (Tafazzol et al. 2014:
 //           about 0.7 early in forward bending, 0.57 late).
-// Usage: bench_pelvis_tilt DATASET BVH_FILE START_S [ROOT_JOINT NECK_JOINT]
-//   e.g. bench_pelvis_tilt /tmp/unseen /usr/share/assimp/models/BVH/01_03.bvh 1.0 Hips Neck
+// Usage: bench_pelvis_tilt CHARACTER MAPPING BVH_FILE START_S FRAMES [ROOT_JOINT NECK_JOINT]
+//   e.g. bench_pelvis_tilt configs/characters/makehuman_skirt_coarse.yaml
+//        configs/retarget/cmu_to_makehuman.yaml /usr/share/assimp/models/BVH/01_03.bvh 1.0 150
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
@@ -22,10 +23,10 @@
 
 #include "capture/character/character.h"
 #include "capture/character/skeletool_io.h"
-#include "capture/dataset/synthetic_dataset.h"
 #include "capture/evaluation/frame_measures.h"
 #include "capture/model/capture_networks.h"
 #include "capture/motion/bvh.h"
+#include "capture/motion/motion_retarget.h"
 #include "graph/error.h"
 
 using namespace weft;
@@ -44,16 +45,19 @@ void summary(const char* what, const std::vector<double>& v) {
 }
 
 int run(int argc, char** argv) {
-  WEFT_CHECK(argc == 4 || argc == 6, "usage: bench_pelvis_tilt DATASET BVH_FILE START_S [ROOT_JOINT NECK_JOINT]");
-  const std::string data = argv[1], bvh_path = argv[2];
-  const double start_s = std::stod(argv[3]);
-  const std::string root_name = argc == 6 ? argv[4] : "Hips", neck_name = argc == 6 ? argv[5] : "Neck";
-  const DatasetInfo info = read_dataset_info(data);
-  const Character ch = load_character(info.character);
-  const Motion gt = read_motion((std::filesystem::path(data) / "gt" / "pose.motion").string(), int(ch.rest_dofs.size()));
+  WEFT_CHECK(argc == 6 || argc == 8,
+             "usage: bench_pelvis_tilt CHARACTER MAPPING BVH_FILE START_S FRAMES [ROOT_JOINT NECK_JOINT]");
+  const std::string character = argv[1], mapping = argv[2], bvh_path = argv[3];
+  const double start_s = std::stod(argv[4]), fps = 30;
+  const int frames = std::stoi(argv[5]);
+  const std::string root_name = argc == 8 ? argv[6] : "Hips", neck_name = argc == 8 ? argv[7] : "Neck";
+  const Character ch = load_character(character);
+  const BvhMotion bvh = read_bvh(bvh_path);
+  const RetargetResult retargeted = retarget_motion(
+      bvh, load_retarget_mapping(mapping), ch, {.fps = fps, .start_s = start_s, .end_s = start_s + (frames - 0.5) / fps});
+  const Motion& gt = retargeted.motion;
   const PoseParametrisation param = pose_parametrisation(ch);
   const Eigen::Matrix3d pivot_rest = pose_character(ch, ch.rest_dofs).joints[param.pivot_joint].linear();
-  const BvhMotion bvh = read_bvh(bvh_path);
   int root = -1, neck = -1;
   for (int j = 0; j < int(bvh.joints.size()); ++j) {
     if (bvh.joints[j].name == root_name) root = j;
@@ -63,7 +67,7 @@ int run(int argc, char** argv) {
 
   std::vector<double> src_tilt, src_trunk, src_share, chr_tilt, chr_trunk, chr_share;
   for (int f = 0; f < gt.num_frames(); ++f) {
-    const BvhTransforms T = bvh_global_transforms_at(bvh, start_s + f / info.fps);
+    const BvhTransforms T = bvh_global_transforms_at(bvh, start_s + f / fps);
     const Eigen::Matrix3d R = T[root].linear();
     const double s_tilt = tilt_error_deg(R, Eigen::Matrix3d::Identity());
     const double s_trunk = angle_from_vertical_deg(T[neck].translation() - T[root].translation());
@@ -77,7 +81,11 @@ int run(int argc, char** argv) {
     chr_tilt.push_back(c_tilt), chr_trunk.push_back(c_trunk);
     if (c_trunk >= 10) chr_share.push_back((c_trunk - c_tilt) / c_trunk);
   }
-  std::printf("%s (%s from %.2f s) against %s\n", bvh_path.c_str(), root_name.c_str(), start_s, data.c_str());
+  std::printf("%s (%s from %.2f s) onto %s by %s: bone directions %.1f deg mean, %.1f deg worst frame; orientation "
+              "targets %.1f deg mean\n",
+              bvh_path.c_str(), root_name.c_str(), start_s, character.c_str(), mapping.c_str(),
+              retargeted.mean_direction_error_deg, retargeted.max_direction_error_deg,
+              retargeted.orientation_error_deg.size() ? retargeted.orientation_error_deg.mean() : 0.0);
   summary("source: pelvis tilt (deg)", src_tilt);
   summary("source: trunk lean, root -> neck (deg)", src_trunk);
   summary("source: lumbar share (trunk >= 10 deg)", src_share);

@@ -53,13 +53,24 @@ Eigen::Matrix3d parse_axes(const StrictYaml& y, const YAML::Node& node) {
 struct Targets {
   std::vector<Eigen::Vector3d> directions;  // per bone, unit, character axes
   Eigen::Vector3d root;                     // character units
+  std::vector<Eigen::Matrix3d> rotations;   // per orientation target, the joint's global rotation
 };
+
+// A joint whose global rotation is a target (RetargetMapping::orientations).
+struct OrientationTarget {
+  int source = -1, target = -1;  // BVH joint, character joint
+  double weight = 1;
+};
+
+Eigen::Vector3d vee_of_skew_part(const Eigen::Matrix3d& M) {
+  return 0.5 * Eigen::Vector3d(M(2, 1) - M(1, 2), M(0, 2) - M(2, 0), M(1, 0) - M(0, 1));
+}
 
 class Solver {
  public:
-  Solver(const Skeleton& s, const std::vector<RetargetBone>& bones, const std::vector<int>& root_joints,
-         double root_weight, double length_scale, const RetargetMapping& m)
-      : s_(s), bones_(bones), root_joints_(root_joints), root_weight_(root_weight),
+  Solver(const Skeleton& s, const std::vector<RetargetBone>& bones, const std::vector<OrientationTarget>& orientations,
+         const std::vector<int>& root_joints, double root_weight, double length_scale, const RetargetMapping& m)
+      : s_(s), bones_(bones), orientations_(orientations), root_joints_(root_joints), root_weight_(root_weight),
         length_scale_(length_scale), smooth_(m.smoothness), rest_(m.rest_weight), tol_(m.tolerance) {
     const int J = s.num_joints();
     ancestor_.assign(static_cast<size_t>(J) * J, 0);
@@ -88,6 +99,7 @@ class Solver {
         const Joint& j = s_.joints[inf.joint];
         if (j.type == JointType::revolute) {
           for (int e : endpoints) use = use || (e != inf.joint && is_ancestor(inf.joint, e));
+          for (const OrientationTarget& o : orientations_) use = use || is_ancestor(inf.joint, o.target);
         } else {
           bool revolute_above = false;
           for (int p = j.parent; p >= 0; p = s_.joints[p].parent)
@@ -104,8 +116,14 @@ class Solver {
   void evaluate(const Eigen::VectorXd& q, const Targets& t, const std::vector<int>& active,
                 Eigen::VectorXd& r, Eigen::MatrixXd* Jac) const {
     const Transforms G = forward_kinematics(s_, q);
-    const int B = static_cast<int>(bones_.size());
-    r.resize(3 * B + 3);
+    const int B = static_cast<int>(bones_.size()), O = static_cast<int>(orientations_.size());
+    r.resize(3 * B + 3 + 3 * O);
+    // Orientation residuals: the skew part of E = R_targetᵀ R (sin θ times the axis).
+    std::vector<Eigen::Matrix3d> E(O);
+    for (int o = 0; o < O; ++o) {
+      E[o] = t.rotations[o].transpose() * G[orientations_[o].target].linear();
+      r.segment<3>(3 * B + 3 + 3 * o) = std::sqrt(orientations_[o].weight) * vee_of_skew_part(E[o]);
+    }
     std::vector<Eigen::Vector3d> dirs(B);
     std::vector<Eigen::Matrix3d> dnorm(B);  // (I − d dᵀ)/L: the normalisation's derivative
     for (int b = 0; b < B; ++b) {
@@ -142,6 +160,15 @@ class Solver {
         Eigen::Vector3d droot = Eigen::Vector3d::Zero();
         for (int j : root_joints_) droot += dx(j);
         Jm.block<3, 1>(3 * B, c) += rw * droot / static_cast<double>(root_joints_.size());
+        // A revolute dof turns every joint below it about its world axis a: dE = [Rᵀ_target a]× E.
+        if (joint.type == JointType::revolute)
+          for (int o = 0; o < O; ++o) {
+            if (!is_ancestor(inf.joint, orientations_[o].target)) continue;
+            const Eigen::Vector3d b = t.rotations[o].transpose() * (inf.weight * axis);
+            Eigen::Matrix3d bx;
+            bx << 0, -b.z(), b.y(), b.z(), 0, -b.x(), -b.y(), b.x(), 0;
+            Jm.block<3, 1>(3 * B + 3 + 3 * o, c) += std::sqrt(orientations_[o].weight) * vee_of_skew_part(bx * E[o]);
+          }
       }
     }
   }
@@ -200,6 +227,7 @@ class Solver {
  private:
   const Skeleton& s_;
   std::vector<RetargetBone> bones_;
+  std::vector<OrientationTarget> orientations_;
   std::vector<int> root_joints_;
   double root_weight_, length_scale_, smooth_, rest_, tol_;
   std::vector<char> ancestor_;  // J×J: ancestor_[j*J+k] = j is k or above it
@@ -243,6 +271,7 @@ int source_joint(const BvhMotion& motion, const RetargetMapping& m, const std::s
 // The mapping resolved against one BVH file and one skeleton.
 struct Resolved {
   std::vector<RetargetBone> bones;
+  std::vector<OrientationTarget> orientations;
   std::vector<int> source_mapped, target_mapped;  // parallel
   std::vector<int> source_root, target_root;
 };
@@ -282,6 +311,11 @@ Resolved resolve(const BvhMotion& motion, const RetargetMapping& m, const Skelet
     if (target_of[a] < 0 || target_of[b] < 0)
       fail(file, ": extra bone '", e.source_from, "->", e.source_to, "' joins joints that are not mapped");
     r.bones.push_back({e.source_from + "->" + e.source_to, a, b, target_of[a], target_of[b], e.weight});
+  }
+  for (const auto& [n, w] : m.orientations) {
+    const int a = source_joint(motion, m, n);
+    if (target_of[a] < 0) fail(file, ": orientations: '", n, "' is not a mapped joint");
+    r.orientations.push_back({a, target_of[a], w});
   }
   if (r.bones.empty()) fail(file, ": the mapping defines no bones (map at least two joints)");
   if (m.root_joints.empty()) fail(file, ": root.joints is empty");
@@ -529,6 +563,10 @@ void record_frame(int f, const Eigen::VectorXd& q, const Targets& t, const Resol
   Eigen::Vector3d root = Eigen::Vector3d::Zero();
   for (int b : res.target_root) root += G[b].translation();
   out.root_error(f) = (root / static_cast<double>(res.target_root.size()) - t.root).norm();
+  for (size_t o = 0; o < res.orientations.size(); ++o)
+    out.orientation_error_deg(f) +=
+        Eigen::AngleAxisd(t.rotations[o].transpose() * G[res.orientations[o].target].linear()).angle() * 180 /
+        std::numbers::pi / double(res.orientations.size());
 }
 
 }  // namespace
@@ -542,7 +580,8 @@ RetargetMapping parse_retarget_mapping(const std::string& text, const std::strin
   m.file = name;
   try {
     y.check_keys(root, "", {"source_units_m", "source_axes", "up", "joints", "bone_weights", "extra_bones",
-                            "rest_elevation", "floor_markers", "root", "source_floor", "fixed_dofs", "solver"});
+                            "rest_elevation", "floor_markers", "root", "source_floor", "fixed_dofs", "solver",
+                            "orientations"});
     if (root["source_units_m"]) m.source_metres_per_unit = y.positive(root["source_units_m"], "source_units_m");
     if (root["source_axes"]) m.source_to_target = parse_axes(y, root["source_axes"]);
     if (root["up"]) {
@@ -575,6 +614,15 @@ RetargetMapping parse_retarget_mapping(const std::string& text, const std::strin
         if (b.size() == 3) spec.weight = y.number(b[2], "extra_bones");
         if (spec.weight < 0) y.fail_at(b, "extra_bones", "weights must be >= 0");
         m.extra_bones.push_back(spec);
+      }
+    }
+    if (const YAML::Node w = root["orientations"]) {
+      if (!w.IsMap()) y.fail_at(w, "orientations", "expected a mapping source joint: weight");
+      for (const auto& kv : w) {
+        const std::string key = "orientations." + kv.first.Scalar();
+        const double v = y.number(kv.second, key);
+        if (!(v > 0)) y.fail_at(kv.second, key, "weights must be > 0");
+        m.orientations.emplace_back(kv.first.Scalar(), v);
       }
     }
     if (root["rest_elevation"]) m.rest_elevation = y.strings(root["rest_elevation"], "rest_elevation");
@@ -677,7 +725,7 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
 
   // Root residuals are divided by the mean bone length: comparable to direction residuals.
   const double mean_bone = lengths.target_units / static_cast<double>(res.bones.size());
-  Solver solver(s, bones, res.target_root, m.root_weight, mean_bone, m);
+  Solver solver(s, bones, res.orientations, res.target_root, m.root_weight, mean_bone, m);
   out.solved_dofs = solver.observable_dofs(m.fixed_dofs);
   // For the first frame, the root's own dofs first: the character may face anywhere
   // relative to the source.
@@ -687,11 +735,20 @@ RetargetResult retarget_motion(const BvhMotion& motion, const RetargetMapping& m
   out.motion.frame_ids.resize(F);
   out.direction_error_deg.resize(F);
   out.root_error.resize(F);
+  out.orientation_error_deg = Eigen::VectorXd::Zero(F);
   Eigen::VectorXd q = clamp_to_limits(s, rest_dofs);
   for (int f = 0; f < F; ++f) {
     Targets t;
     for (const RetargetBone& b : bones) t.directions.push_back(target_direction(src[f], b, up));
     t.root = roots.at(src[f]);
+    if (!res.orientations.empty()) {
+      // The source joint's turn from its zero pose, in character axes, applied to the
+      // character joint's rest rotation.
+      const BvhTransforms G = bvh_global_transforms_at(motion, times.times[f]);
+      for (const OrientationTarget& ot : res.orientations)
+        t.rotations.push_back(m.source_to_target * G[ot.source].linear() * zero[ot.source].linear().transpose() *
+                              m.source_to_target.transpose() * rest[ot.target].linear());
+    }
     const Eigen::VectorXd previous = q;
     if (f == 0) {
       if (!root_dofs.empty()) solver.solve(q, t, root_dofs, previous, rest_dofs, 10 * m.iterations);

@@ -43,6 +43,13 @@ struct RetargetMapping {
   std::vector<std::pair<std::string, std::string>> joints;
   std::vector<std::pair<std::string, double>> bone_weights;  // by the bone's source end joint
   std::vector<RetargetBoneSpec> extra_bones;
+  // Orientation targets: the mapped character joint's global rotation follows the source
+  // joint's, relative to their rest and zero poses, [source, weight]. Bone directions leave a
+  // joint's rotation about them free and cannot tell a pelvis that tilts from a lower spine
+  // that bends above it (CMU's LowerBack bends at the hips' own position, while the
+  // MakeHuman character's first spine joint sits 15 cm higher: matching the lumbar bone
+  // tilted the character's pelvis 42° where CMU 01_03's tilts 13.5°, bench_pelvis_tilt).
+  std::vector<std::pair<std::string, double>> orientations;
   // Bones (by their source end joint) that keep the character's rest elevation relative
   // to the source's zero pose: where the two skeletons put a joint differently (ddc's
   // ankle sits higher above its toes than CMU's), matching the feet's directions exactly
@@ -95,6 +102,9 @@ struct RetargetResult {
   std::vector<int> solved_dofs;         // the dofs the solver moved; the rest stay at rest
   Eigen::VectorXd direction_error_deg;  // per frame: mean angle over bones (degrees)
   Eigen::VectorXd root_error;           // per frame: root position error (character units)
+  // Per frame: the mean angle between each orientation target and its joint's rotation
+  // (degrees; 0 without orientation targets).
+  Eigen::VectorXd orientation_error_deg;
   double mean_direction_error_deg = 0, max_direction_error_deg = 0;
   double root_scale = 1;                // character size / source size
   double source_height_m = 0;           // standing height of the source's mapped joints, first frame
