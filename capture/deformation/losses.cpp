@@ -1,5 +1,7 @@
 #include "capture/deformation/losses.h"
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <limits>
 
@@ -40,6 +42,28 @@ Tensor keypoint_3d_loss(const Tensor& points, const Tensor& targets, const Tenso
   const Tensor d = ops::sub(points, targets);
   const Tensor sq = ops::sum(ops::mul(d, d), {2});  // [B,M]
   return ops::scale(ops::sum(ops::mul(sq, weights)), 1.0 / static_cast<double>(points.size(0)));
+}
+
+Tensor lumbopelvic_loss(const Tensor& rotations, const Tensor& targets) {
+  if (rotations.dim() != 3 || rotations.size(1) != 3 || rotations.size(2) != 3)
+    fail("lumbopelvic_loss: rotations must be [B, 3, 3], got ", shape_str(rotations.shape()));
+  if (targets.shape() != Shape{rotations.size(0), 3})
+    fail("lumbopelvic_loss: targets must be [B, 3] = ", shape_str({rotations.size(0), 3}), ", got ",
+         shape_str(targets.shape()));
+  const Tensor up = ops::reshape(ops::slice(rotations, 2, 1, 2), {rotations.size(0), 3});  // R ŷ
+  const Tensor d = ops::sub(up, targets);
+  return ops::scale(ops::sum(ops::mul(d, d)), 1.0 / static_cast<double>(rotations.size(0)));
+}
+
+Eigen::Vector3d lumbopelvic_target(const Eigen::Vector3d& trunk, const Eigen::Vector3d& rest_trunk,
+                                   double lumbar_share) {
+  const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
+  if (!(trunk.norm() > 0) || !(rest_trunk.norm() > 0) || !trunk.allFinite() || !rest_trunk.allFinite()) return y;
+  const Eigen::Vector3d a = rest_trunk.normalized(), b = trunk.normalized();
+  const Eigen::Vector3d axis = a.cross(b);
+  const double angle = std::atan2(axis.norm(), a.dot(b));
+  if (axis.norm() < 1e-12) return y;  // no turn, or half a turn: no unique axis
+  return Eigen::AngleAxisd((1 - lumbar_share) * angle, axis.normalized()) * y;
 }
 
 std::vector<int> boundary_vertices(const Camera& camera, const Vertices& V, const Faces& F,

@@ -25,6 +25,22 @@ Tensor landmark_loss(const Tensor& projected, const Tensor& detections, const Te
 // value where w is 0), weights [B,M] → scalar (units²).
 Tensor keypoint_3d_loss(const Tensor& points, const Tensor& targets, const Tensor& weights);
 
+// L_lp, the lumbopelvic prior = Σ_b ‖R_b ŷ − t_b‖² / B: root rotations [B,3,3] (the root
+// chain's world rotation, identity at rest), targets [B,3] (lumbopelvic_target) → scalar.
+// R ŷ is the pelvis's up axis: keypoints fix the trunk but not how its lean is shared
+// between the pelvis and the lumbar spine (BODY_25's MidHip and hips lie on the pelvis's
+// left–right axis), so the prior states the human share.
+Tensor lumbopelvic_loss(const Tensor& rotations, const Tensor& targets);
+
+// Where the pelvis's up axis points when it takes (1 − lumbar_share) of the trunk's turn
+// from its rest direction: the minimal rotation taking `rest_trunk` to `trunk` (both
+// MidHip → Neck, any length), scaled to that fraction of its angle, applied to +y. In
+// forward bending the lumbar spine takes about 70 % of the trunk's flexion early and 57 %
+// late (Tafazzol et al., Clinical Biomechanics 2014; CMU 01_03: 60 %, docs/MOTIONS.md).
+// A trunk turned by 180° from rest (no unique axis) or of zero length gives +y.
+Eigen::Vector3d lumbopelvic_target(const Eigen::Vector3d& trunk, const Eigen::Vector3d& rest_trunk,
+                                   double lumbar_share);
+
 // Vertices of a mesh on its silhouette as seen by `camera`: the normal is nearly
 // perpendicular to the viewing ray (|cos| ≤ max_cos) and the vertex is visible (no
 // closer surface point within a pixel neighbourhood of a point z-buffer).

@@ -123,6 +123,7 @@ class Trainer {
     bool with_3d = false;
     for (const StageConfig& s : cfg_.stages) with_3d |= s.steps > 0 && s.weights.keypoints_3d > 0;
     if (with_3d) triangulate_frames(frames);
+    rest_body25_ = pose_character(character_, character_.rest_dofs).body25;
     body_arap_ = arap_terms(character_.body.graph, DType::F32);
     if (character_.has_cloth()) {
       cloth_arap_ = arap_terms(character_.cloth->graph, DType::F32);
@@ -257,6 +258,24 @@ class Trainer {
                                          Tensor::from_data({B, kBody25Count}, weights, dt));
     return ops::scale(loss, mpu * mpu * double(B) / std::max(total, 1.0));
   }
+  // L_lp of a batch: the pelvis's up axis against where the lumbar share of each predicted
+  // trunk's lean (MidHip → Neck, held fixed: the prior moves the pelvis, not the trunk)
+  // puts it.
+  Tensor lumbopelvic_term(const CapturePrediction& p) const {
+    constexpr int kNeck = 1, kMidHip = 8;
+    const Eigen::Vector3d rest = rest_body25_.row(kNeck) - rest_body25_.row(kMidHip);
+    WEFT_CHECK(rest.allFinite(), cfg_.file, ": lumbopelvic needs the character's BODY_25 Neck and MidHip (",
+               info_.character, " does not map both)");
+    const int64_t B = p.keypoints.size(0);
+    std::vector<double> targets(B * 3);
+    for (int64_t b = 0; b < B; ++b) {
+      const Vertices K = sample_vertices(p.keypoints, b);
+      const Eigen::Vector3d t = lumbopelvic_target((K.row(kNeck) - K.row(kMidHip)).transpose(), rest, cfg_.lumbar_share);
+      for (int a = 0; a < 3; ++a) targets[b * 3 + a] = t(a);
+    }
+    return lumbopelvic_loss(p.rotation, Tensor::from_data({B, 3}, targets, p.rotation.dtype()));
+  }
+  Vertices rest_body25_;  // the character's BODY_25 keypoints at rest
   struct RootPose {
     Eigen::Vector3d pivot;     // the pivot joint's position (character units)
     Eigen::Matrix3d rotation;  // root_rotation_world
@@ -326,6 +345,7 @@ std::map<std::string, Tensor> Trainer::image_and_regulariser_terms(const Capture
   if (w.landmarks > 0 || stats)
     t["landmarks"] = multiview_landmark_loss(p.keypoints, batch.frames, *supervision_, model_.keypoint_mask(), stats);
   if (w.keypoints_3d > 0) t["keypoints_3d"] = keypoint_3d_term(p, batch);
+  if (w.lumbopelvic > 0) t["lumbopelvic"] = lumbopelvic_term(p);
   if (w.silhouette > 0) {
     const Tensor all = p.cloth.defined() ? ops::concat({p.body, p.cloth}, 1) : p.body;
     t["silhouette"] = multiview_silhouette_loss(all, faces_, batch.frames, *supervision_);

@@ -36,6 +36,8 @@ const std::vector<LossTerm>& loss_terms() {
       {"arap", &LossWeights::arap, "L_arap: as-rigid-as-possible energy of the embedded graphs"},
       {"attachment", &LossWeights::attachment, "L_att: squared distance of the garment's anchors to their body triangles"},
       {"simulation", &LossWeights::simulation, "L_sim: squared distance of the predicted cloth to its simulation"},
+      {"lumbopelvic", &LossWeights::lumbopelvic,
+       "L_lp: squared distance of the pelvis's up axis to where the human lumbopelvic share of the trunk's lean puts it"},
   };
   return table;
 }
@@ -70,7 +72,7 @@ void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
   if (s.kind == StageKind::pose && (s.weights.silhouette > 0 || s.weights.arap > 0 || s.weights.cloth_arap > 0 ||
                                     s.weights.attachment > 0 || s.weights.simulation > 0))
     y.fail_at(n, where + "landmarks",
-              "the pose stage trains PoseNet on landmarks and keypoints_3d only: other weights must be 0");
+              "the pose stage trains PoseNet on landmarks, keypoints_3d and lumbopelvic only: other weights must be 0");
   if (s.kind == StageKind::warmup && s.weights.simulation > 0)
     y.fail_at(n["simulation"], where + "simulation", "the warm start has no simulation loss (that is the physics stage)");
 }
@@ -85,11 +87,11 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
                           "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
-                          "shards", "oracle_pose", "physics", "augmentation"});
+                          "shards", "oracle_pose", "physics", "augmentation", "lumbar_share"});
   TrainingConfig c;
   c.file = name;
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
-  y.numbers(root, "", {},
+  y.numbers(root, "", {{"lumbar_share", &c.lumbar_share, 0, 1}},
             {{"silhouette_size", &c.silhouette_size, 16, 4096},
              {"loader_threads", &c.loader_threads, 0, 64},
              {"log_every", &c.log_every, 1, 1e8},

@@ -22,6 +22,7 @@ struct LossWeights {
   double cloth_arap = -1; // L_arap of the garment's graph (< 0: the same as `arap`)
   double attachment = 0;  // L_att
   double simulation = 0;  // L_sim
+  double lumbopelvic = 0; // L_lp: the pelvis's share of the trunk's lean (a prior; deformation/losses.h)
 };
 
 // The loss terms of training, one entry each: `name` is the key of its weight under
@@ -93,6 +94,10 @@ struct TrainingConfig {
   // isolates what the deformation stages do to the garment from pose error (the paper
   // assumes PoseNet fixed in its section 3.3.2). The pose stage is then not needed.
   bool oracle_pose = false;
+  // The lumbar spine's share of the trunk's lean (MidHip → Neck turned from rest) that the
+  // lumbopelvic prior (stages.<stage>.lumbopelvic) leaves to it; the pelvis takes the rest.
+  // Forward bending: about 0.7 early, 0.57 late (Tafazzol et al. 2014); CMU 01_03: 0.6.
+  double lumbar_share = 0.6;
   // The train split's samples, augmented (capture/dataset/augmentation.h); validation and
   // evaluation read the images as they are.
   AugmentationOptions augmentation;

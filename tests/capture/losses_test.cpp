@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "capture/deformation/losses.h"
+#include "graph/error.h"
 #include "ops/ops.h"
 
 namespace weft::capture {
@@ -16,6 +18,37 @@ TEST(Losses, LandmarkLossWeightsSquaredPixelErrorsByConfidence) {
   const Tensor c = Tensor::from_data({1, 2}, std::vector<double>{0.5, 0.0}, DType::F64);
   EXPECT_DOUBLE_EQ(landmark_loss(p, d, c).item(), 0.5 * 25);
   EXPECT_THROW(landmark_loss(p, d, Tensor::ones({2, 2}, DType::F64)), Error);
+}
+
+TEST(Losses, LumbopelvicTargetGivesThePelvisItsShareOfTheTrunksLean) {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  const double deg = std::numbers::pi / 180;
+  // The trunk leaned 45° forward (toward +z) from upright: with the lumbar spine taking
+  // 60 %, the pelvis's up axis leans 18° forward.
+  const Eigen::Vector3d trunk(0, std::cos(45 * deg), std::sin(45 * deg));
+  const Eigen::Vector3d t = lumbopelvic_target(2 * trunk, 0.3 * up, 0.6);
+  EXPECT_NEAR(std::acos(t.dot(up)) / deg, 18, 1e-9);
+  EXPECT_NEAR(t.x(), 0, 1e-12);
+  EXPECT_GT(t.z(), 0);
+  // Relative to the rest direction: a rest trunk leaning 5° back, the same trunk now: the
+  // pelvis takes 40 % of 50°.
+  const Eigen::Vector3d rest(0, std::cos(5 * deg), -std::sin(5 * deg));
+  EXPECT_NEAR(std::acos(lumbopelvic_target(trunk, rest, 0.6).dot(up)) / deg, 20, 1e-9);
+  // The whole lean to the lumbar spine: the pelvis stays upright; none: it leans with the trunk.
+  EXPECT_TRUE(lumbopelvic_target(trunk, up, 1.0).isApprox(up, 1e-12));
+  EXPECT_TRUE(lumbopelvic_target(trunk, up, 0.0).isApprox(trunk, 1e-12));
+  // No trunk (a NaN keypoint): upright.
+  EXPECT_EQ(lumbopelvic_target(Eigen::Vector3d::Constant(NAN), up, 0.6), up);
+}
+
+TEST(Losses, LumbopelvicLossIsTheSquaredDistanceOfThePelvisUpAxis) {
+  // Two frames: the identity (up axis +y) against +y (0) and a rotation of 90° about x (up
+  // axis +z) against +y: ‖(0, −1, 1)‖² = 2; mean over frames 1.
+  std::vector<double> R = {1, 0, 0, 0, 1, 0, 0, 0, 1,  1, 0, 0, 0, 0, -1, 0, 1, 0};
+  const Tensor rotations = Tensor::from_data({2, 3, 3}, R, DType::F64);
+  const Tensor targets = Tensor::from_data({2, 3}, {0, 1, 0, 0, 1, 0}, DType::F64);
+  EXPECT_NEAR(lumbopelvic_loss(rotations, targets).item(), 1.0, 1e-12);
+  EXPECT_THROW(lumbopelvic_loss(rotations, Tensor::from_data({2, 2}, {0, 1, 0, 1}, DType::F64)), Error);
 }
 
 TEST(Losses, ArapEnergyVanishesForARigidMotionOfTheGraph) {

@@ -56,7 +56,17 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, lr: -1}\n", "c.yaml"); },
                {"c.yaml", "stages.pose.lr"});
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, silhouette: 1}\n", "c.yaml"); },
-               {"c.yaml", "landmarks and keypoints_3d only"});
+               {"c.yaml", "landmarks, keypoints_3d and lumbopelvic only"});
+  // The lumbopelvic prior and its share: a pose-stage weight, and a share in [0, 1].
+  const TrainingConfig lp =
+      parse_training_config("lumbar_share: 0.7\nstages:\n  pose: {steps: 4, landmarks: 1, lumbopelvic: 0.5}\n", "c.yaml");
+  EXPECT_EQ(lp.stages[0].weights.lumbopelvic, 0.5);
+  EXPECT_EQ(lp.lumbar_share, 0.7);
+  EXPECT_EQ(parse_training_config(kStages, "c.yaml").lumbar_share, 0.6);
+  expect_error([] { parse_training_config(std::string(kStages) + "lumbar_share: 1.5\n", "c.yaml"); },
+               {"c.yaml", "lumbar_share"});
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, lumbopelvic: -2}\n", "c.yaml"); },
+               {"c.yaml", "stages.pose.lumbopelvic"});
   // L_3d is a pose-stage term: read as one of its weights.
   EXPECT_EQ(parse_training_config("stages:\n  pose: {steps: 4, landmarks: 1, keypoints_3d: 250}\n", "c.yaml")
                 .stages[0]

@@ -83,6 +83,16 @@ WEFT_GRADCHECK_CASES(loss_terms) {
   }
   {
     GradcheckCase c;
+    c.op = "slice";
+    c.name = case_prefix("lumbopelvic") + " root rotations [3,3,3] against targets [3,3]";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {3, 3, 3}, -1, 1), uniform64(g, {3, 3}, -1, 1)};
+    };
+    c.function = [](const std::vector<Tensor>& in) { return capture::lumbopelvic_loss(in[0], in[1]); };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
     c.op = "image_sample_bilinear";
     c.name = case_prefix("silhouette") + " 5 boundary points in a 6x8 distance transform, per-point rho";
     c.make_inputs = [](Generator& g) {
