@@ -1,7 +1,7 @@
 #pragma once
 // Synthetic 2D keypoints: BODY_25 joints of a posed character projected into a camera,
 // then made to look like a detector's output (OpenPose). Two error models:
-// - gaussian (the default, what every dataset before 2026-12 has): a fixed Gaussian pixel
+// - gaussian (the default, and every dataset made before the openpose model): a fixed pixel
 //   noise, lower confidence where the joint is hidden by the body, random dropouts.
 // - openpose: what a bottom-up detector gets wrong (docs/DATASET.md, "Detector error
 //   model"): a position error proportional to the person's size in the image, per
