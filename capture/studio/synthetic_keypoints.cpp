@@ -35,11 +35,14 @@ double pair_foreshortening(const Camera& camera, const Vertices& body25_world, i
   return std::clamp((camera.project(A) - camera.project(B)).norm() / face_on_px, 0.0, 1.0);
 }
 
-// The gaussian model: what every dataset before the openpose model was made with; its
-// draws and outputs must not change.
-Body25 gaussian_keypoints(const Camera& camera, const Body25& clean,
-                          const std::array<KeypointVisibility, kBody25Count>& visibility,
-                          const KeypointNoiseConfig& config, uint64_t seed) {
+// Both models' per-keypoint draws: a keypoint that is in the image is dropped at its
+// visibility's rate, else moved by Gaussian noise of sigma_px(k) per axis and reported with
+// confidence(base, |error| in σ per axis, jitter). The gaussian model is what every dataset
+// before the openpose model was made with: its draws and outputs must not change.
+template <class Sigma, class Confidence>
+Body25 noisy_keypoints(const Camera& camera, const Body25& clean,
+                       const std::array<KeypointVisibility, kBody25Count>& visibility,
+                       const KeypointNoiseConfig& config, uint64_t seed, Sigma sigma_px, Confidence confidence) {
   Body25 out = Body25::Zero();
   for (int k = 0; k < kBody25Count; ++k) {
     // Every keypoint draws the same four numbers whatever happens to it, so streams stay
@@ -51,13 +54,22 @@ Body25 gaussian_keypoints(const Camera& camera, const Body25& clean,
     const bool occluded = visibility[k] == KeypointVisibility::occluded;
     if (visibility[k] != KeypointVisibility::visible && !occluded) continue;
     if (drop < (occluded ? config.occluded_dropout : config.dropout)) continue;
-    const Eigen::Vector2d uv(clean(k, 0) + config.noise_px * noise_x, clean(k, 1) + config.noise_px * noise_y);
+    const double sigma = sigma_px(k);
+    const Eigen::Vector2d uv(clean(k, 0) + sigma * noise_x, clean(k, 1) + sigma * noise_y);
     if (!in_image(camera, uv)) continue;  // a detector reports nothing outside the frame
     const double base = occluded ? config.occluded_confidence : config.visible_confidence;
-    const double confidence = std::clamp(base + config.confidence_jitter * jitter, 1e-3, 1.0);
-    out.row(k) << uv.x(), uv.y(), confidence;
+    const double error_sigmas = sigma > 0 ? std::hypot(noise_x, noise_y) : 0.0;
+    out.row(k) << uv.x(), uv.y(), std::clamp(confidence(base, error_sigmas, jitter), 1e-3, 1.0);
   }
   return out;
+}
+
+Body25 gaussian_keypoints(const Camera& camera, const Body25& clean,
+                          const std::array<KeypointVisibility, kBody25Count>& visibility,
+                          const KeypointNoiseConfig& config, uint64_t seed) {
+  return noisy_keypoints(
+      camera, clean, visibility, config, seed, [&](int) { return config.noise_px; },
+      [&](double base, double, double jitter) { return base + config.confidence_jitter * jitter; });
 }
 
 // The openpose model (header: synthesize_keypoints).
@@ -65,27 +77,14 @@ Body25 detector_keypoints(const Camera& camera, const Vertices& body25_world, co
                           const Body25& clean, const std::array<KeypointVisibility, kBody25Count>& visibility,
                           const KeypointNoiseConfig& config, uint64_t seed) {
   const double scale_px = person_scale_px(camera, body25_world, depth);
-  Body25 out = Body25::Zero();
-  for (int k = 0; k < kBody25Count; ++k) {
-    // Four draws per keypoint whatever happens to it, as in the gaussian model.
-    PortableRandom rng(mix_seed(seed, static_cast<uint64_t>(k), 0));
-    const double noise_x = rng.gaussian(), noise_y = rng.gaussian();
-    const double jitter = rng.uniform(-1.0, 1.0);
-    const double drop = rng.uniform();
-    const bool occluded = visibility[k] == KeypointVisibility::occluded;
-    if (visibility[k] != KeypointVisibility::visible && !occluded) continue;
-    if (drop < (occluded ? config.occluded_dropout : config.dropout)) continue;
-    // COCO's σ_k is the rms of the Euclidean distance: per axis it is σ_k / √2.
-    const double sigma_px = config.scale_error_multiple * kBody25CocoSigma[k] * scale_px / std::sqrt(2.0);
-    const Eigen::Vector2d uv(clean(k, 0) + sigma_px * noise_x, clean(k, 1) + sigma_px * noise_y);
-    if (!in_image(camera, uv)) continue;
-    const double error_sigmas = sigma_px > 0 ? std::hypot(noise_x, noise_y) : 0.0;  // |error| / σ per axis
-    const double falloff = error_sigmas / config.confidence_falloff;
-    const double base = occluded ? config.occluded_confidence : config.visible_confidence;
-    const double confidence =
-        std::clamp(base * std::exp(-0.5 * falloff * falloff) + config.confidence_jitter * jitter, 1e-3, 1.0);
-    out.row(k) << uv.x(), uv.y(), confidence;
-  }
+  Body25 out = noisy_keypoints(
+      camera, clean, visibility, config, seed,
+      // COCO's σ_k is the rms of the Euclidean distance: per axis it is σ_k / √2.
+      [&](int k) { return config.scale_error_multiple * kBody25CocoSigma[k] * scale_px / std::sqrt(2.0); },
+      [&](double base, double error_sigmas, double jitter) {
+        const double falloff = error_sigmas / config.confidence_falloff;
+        return base * std::exp(-0.5 * falloff * falloff) + config.confidence_jitter * jitter;
+      });
   for (size_t p = 0; p < kBody25LeftRightPairs.size(); ++p) {
     const auto [right, left] = kBody25LeftRightPairs[p];
     PortableRandom rng(mix_seed(seed, static_cast<uint64_t>(kBody25Count + p), 0));
