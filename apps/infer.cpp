@@ -26,6 +26,10 @@ void add_infer_command(CLI::App& app) {
       "reads). docs/CAPTURE.md explains the options and files.");
   cmd->add_option("--model", o->model, "Model folder: the --out folder of `weft train`")
       ->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--weights", o->weights,
+                  "Weights to use instead of the model folder's: one of its checkpoints "
+                  "(RUN/checkpoints/step_NNNNNNN.safetensors) or a model.safetensors of the same networks")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--input", o->input, "A video file, or a folder of images (frames in name order)")
       ->required()->check(CLI::ExistingPath);
   cmd->add_option("--camera", o->camera,

@@ -119,45 +119,6 @@ cv::Mat read_png(const std::string& path, int flags, int type, const char* expec
 
 // ------------------------------------------------------------------------ cropping
 
-CropWindow choose_crop(const cv::Mat& mask, const Body25& keypoints, int input_size, double margin) {
-  const int width = mask.cols, height = mask.rows;
-  CropWindow crop;
-  int xmin = 0, xmax = width - 1, ymin = 0, ymax = height - 1;  // inclusive pixel indices
-  const cv::Rect box = cv::boundingRect(mask);
-  if (box.area() > 0) {
-    crop.source = CropSource::mask;
-    xmin = box.x, xmax = box.x + box.width - 1, ymin = box.y, ymax = box.y + box.height - 1;
-  } else {
-    // Keypoints inside the image only: a stray detection far outside must not blow the
-    // crop up to gigapixels.
-    int count = 0, kx0 = width, kx1 = -1, ky0 = height, ky1 = -1;
-    for (int j = 0; j < kBody25Count; ++j) {
-      if (!(keypoints(j, 2) >= kConfidentKeypoint)) continue;
-      const double px = std::floor(keypoints(j, 0) + 0.5), py = std::floor(keypoints(j, 1) + 0.5);
-      if (px < 0 || px >= width || py < 0 || py >= height) continue;
-      ++count;
-      kx0 = std::min(kx0, int(px)), kx1 = std::max(kx1, int(px));
-      ky0 = std::min(ky0, int(py)), ky1 = std::max(ky1, int(py));
-    }
-    if (count >= 2 && (kx1 > kx0 || ky1 > ky0)) {
-      crop.source = CropSource::keypoints;
-      xmin = kx0, xmax = kx1, ymin = ky0, ymax = ky1;
-    } else {
-      crop.source = CropSource::whole_image;
-      margin = 0;
-    }
-  }
-  const int w = xmax - xmin + 1, h = ymax - ymin + 1;
-  // The 1e-9 keeps 100 · 1.3 = 130.00000000000003 from becoming 131.
-  crop.side = std::max(1, int(std::ceil(std::max(w, h) * (1 + 2 * margin) - 1e-9)));
-  crop.left = xmin - (crop.side - w) / 2;  // side ≥ w, h: the box stays inside
-  crop.top = ymin - (crop.side - h) / 2;
-  crop.scale = double(input_size) / crop.side;
-  crop.x0 = crop.left - 0.5 + 0.5 / crop.scale;
-  crop.y0 = crop.top - 0.5 + 0.5 / crop.scale;
-  return crop;
-}
-
 // The side×side square at (left, top) of `src`; zeros where it lies beyond the image.
 cv::Mat cut_square(const cv::Mat& src, const CropWindow& crop) {
   cv::Mat out(crop.side, crop.side, src.type(), cv::Scalar::all(0));
@@ -328,6 +289,56 @@ bool same_segment(const DatasetInfo& info, int a, int b) {
 
 // ------------------------------------------------------------------------ SyntheticDataset
 
+CropWindow choose_crop(const cv::Mat& mask, const Body25& keypoints, int input_size, double margin) {
+  const int width = mask.cols, height = mask.rows;
+  CropWindow crop;
+  int xmin = 0, xmax = width - 1, ymin = 0, ymax = height - 1;  // inclusive pixel indices
+  const cv::Rect box = cv::boundingRect(mask);
+  if (box.area() > 0) {
+    crop.source = CropSource::mask;
+    xmin = box.x, xmax = box.x + box.width - 1, ymin = box.y, ymax = box.y + box.height - 1;
+  } else {
+    // Keypoints inside the image only: a stray detection far outside must not blow the
+    // crop up to gigapixels.
+    int count = 0, kx0 = width, kx1 = -1, ky0 = height, ky1 = -1;
+    for (int j = 0; j < kBody25Count; ++j) {
+      if (!(keypoints(j, 2) >= kConfidentKeypoint)) continue;
+      const double px = std::floor(keypoints(j, 0) + 0.5), py = std::floor(keypoints(j, 1) + 0.5);
+      if (px < 0 || px >= width || py < 0 || py >= height) continue;
+      ++count;
+      kx0 = std::min(kx0, int(px)), kx1 = std::max(kx1, int(px));
+      ky0 = std::min(ky0, int(py)), ky1 = std::max(ky1, int(py));
+    }
+    if (count >= 2 && (kx1 > kx0 || ky1 > ky0)) {
+      crop.source = CropSource::keypoints;
+      xmin = kx0, xmax = kx1, ymin = ky0, ymax = ky1;
+    } else {
+      crop.source = CropSource::whole_image;
+      margin = 0;
+    }
+  }
+  const int w = xmax - xmin + 1, h = ymax - ymin + 1;
+  // The 1e-9 keeps 100 · 1.3 = 130.00000000000003 from becoming 131.
+  crop.side = std::max(1, int(std::ceil(std::max(w, h) * (1 + 2 * margin) - 1e-9)));
+  crop.left = xmin - (crop.side - w) / 2;  // side ≥ w, h: the box stays inside
+  crop.top = ymin - (crop.side - h) / 2;
+  crop.scale = double(input_size) / crop.side;
+  crop.x0 = crop.left - 0.5 + 0.5 / crop.scale;
+  crop.y0 = crop.top - 0.5 + 0.5 / crop.scale;
+  return crop;
+}
+
+void move_crop(CropWindow& c, const AugmentationDraw& draw, int input_size) {
+  if (draw.shift_x == 0 && draw.shift_y == 0 && draw.scale == 1) return;
+  const double cx = c.left + 0.5 * c.side + draw.shift_x * c.side, cy = c.top + 0.5 * c.side + draw.shift_y * c.side;
+  c.side = std::max(1, static_cast<int>(std::lround(c.side * draw.scale)));
+  c.left = static_cast<int>(std::lround(cx - 0.5 * c.side));
+  c.top = static_cast<int>(std::lround(cy - 0.5 * c.side));
+  c.scale = double(input_size) / c.side;
+  c.x0 = c.left - 0.5 + 0.5 / c.scale;
+  c.y0 = c.top - 0.5 + 0.5 / c.scale;
+}
+
 Camera crop_camera(const Camera& full, const CropWindow& crop, int input_size) {
   Camera c = full;
   // u' = scale (u − x0): rows 0 and 1 of K shift by x0, y0 times row 2, then scale.
@@ -441,17 +452,7 @@ Sample prepare_sample(const cv::Mat& bgr_in, const cv::Mat& mask, const Body25& 
   Sample s;
   s.camera = camera;
   s.crop = choose_crop(mask, keypoints, S, options.margin);
-  if (draw && (draw->shift_x != 0 || draw->shift_y != 0 || draw->scale != 1)) {
-    // Moved and scaled about its centre; the camera follows below.
-    CropWindow& c = s.crop;
-    const double cx = c.left + 0.5 * c.side + draw->shift_x * c.side, cy = c.top + 0.5 * c.side + draw->shift_y * c.side;
-    c.side = std::max(1, static_cast<int>(std::lround(c.side * draw->scale)));
-    c.left = static_cast<int>(std::lround(cx - 0.5 * c.side));
-    c.top = static_cast<int>(std::lround(cy - 0.5 * c.side));
-    c.scale = double(S) / c.side;
-    c.x0 = c.left - 0.5 + 0.5 / c.scale;
-    c.y0 = c.top - 0.5 + 0.5 / c.scale;
-  }
+  if (draw) move_crop(s.crop, *draw, S);  // the camera follows below
   s.crop_camera = crop_camera(s.camera, s.crop, S);
 
   // Image: to float before resizing, so only one rounding happens (the PNG's).

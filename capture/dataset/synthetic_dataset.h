@@ -130,6 +130,14 @@ struct CropWindow {
   }
 };
 
+// The square SyntheticDataset::load cuts around the person: the bounding box of `mask`
+// (CV_8UC1, nonzero = person), or, when it is empty, of the keypoints with confidence ≥ 0.1
+// inside the image, or else the whole image; its side max(box w, h) · (1 + 2 margin).
+CropWindow choose_crop(const cv::Mat& mask, const Body25& keypoints, int input_size, double margin);
+// The crop moved and scaled about its centre by an augmentation draw's shift and scale
+// (augmentation.h); a draw without either leaves it as it is.
+void move_crop(CropWindow& crop, const AugmentationDraw& draw, int input_size);
+
 // The camera that projects world points into `crop` (same R, t, dist; K changed).
 Camera crop_camera(const Camera& full, const CropWindow& crop, int input_size);
 

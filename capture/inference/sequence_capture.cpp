@@ -432,7 +432,11 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
                                 const std::function<void(const std::string&, int, int)>& progress) {
   const auto t0 = Clock::now();
   PartClock clock;
-  const ModelFolder model = read_model_folder(o.model);
+  ModelFolder model = read_model_folder(o.model);
+  if (!o.weights.empty()) {
+    WEFT_CHECK(fs::is_regular_file(o.weights), "weft infer: --weights ", o.weights, ": no such file");
+    model.weights = o.weights;
+  }
   const CaptureConfig cfg = o.config.empty() ? CaptureConfig{} : load_capture_config(o.config);
   const Character character = load_character(model.character);
   CaptureNetworks nets(character, model.network, model.seed);

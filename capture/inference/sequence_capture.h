@@ -26,6 +26,8 @@ namespace weft::capture {
 
 struct CaptureOptions {
   std::string model;        // a model folder (the --out of `weft train`)
+  std::string weights;      // optional: these weights instead of the folder's (a checkpoint of
+                            // it, e.g. RUN/checkpoints/step_0000500.safetensors: a learning curve)
   std::string input;        // a video file or a folder of images
   std::string camera;       // OpenCV FileStorage YAML (capture/io/camera.h)
   std::string camera_name;  // the camera in that file ("" : its only camera, or its only

@@ -18,6 +18,11 @@ Vertices sample_vertices(const Tensor& vertices, int64_t b) {
              "sample_vertices: expected [B,V,3] and b < B, got ", shape_str(vertices.shape()), " and ", b);
   const int64_t V = vertices.size(1);
   Vertices out(V, 3);
+  if (vertices.dtype() == DType::F64) {
+    const double* p = vertices.data<double>() + b * V * 3;
+    for (int64_t i = 0; i < V * 3; ++i) out.data()[i] = p[i];
+    return out;
+  }
   const float* p = vertices.data<float>() + b * V * 3;
   for (int64_t i = 0; i < V * 3; ++i) out.data()[i] = p[i];
   return out;
@@ -95,6 +100,11 @@ Tensor CaptureNetworks::pose(const Batch& batch) {
   const Tensor image_out = pose_net->forward(batch.images);
   if (!pose_lift) return image_out;
   return ops::add(image_out, pose_lift->forward(keypoint_lift_input(batch, input_size_)));
+}
+
+Tensor CaptureNetworks::pose_from_keypoints(const Batch& batch) const {
+  WEFT_CHECK(pose_lift != nullptr, "CaptureNetworks: no lifting branch (network.keypoint_input is false)");
+  return pose_lift->forward(keypoint_lift_input(batch, input_size_));
 }
 
 std::vector<nn::NamedTensor> CaptureNetworks::pose_parameters() const {

@@ -60,6 +60,10 @@ class CaptureNetworks : public nn::Module {
   // network.keypoint_input, the lifting branch on the input view's detections (pose_lift).
   // Train or evaluation mode is pose_net's (the branch has no batch norm).
   Tensor pose(const Batch& batch);
+  // The lifting branch alone on a batch's detections and crop cameras (no images): the
+  // whole of PoseNet's output for poses no camera filmed (capture/training/virtual_poses.h).
+  // An error without network.keypoint_input.
+  Tensor pose_from_keypoints(const Batch& batch) const;
   // PoseNet's trainable parameters, named as in checkpoints ("pose_net.*", "pose_lift.*").
   std::vector<nn::NamedTensor> pose_parameters() const;
   std::shared_ptr<nn::ResNet> pose_net, deformation_net;

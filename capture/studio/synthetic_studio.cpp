@@ -181,38 +181,6 @@ void parse_camera_setup(const StrictYaml& y, const YAML::Node& n, SynthCameraCon
   }
 }
 
-void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& n, KeypointNoiseConfig& k) {
-  // The model first: it sets the other keys' defaults and which keys apply.
-  if (n.IsMap() && n["model"]) {
-    const std::string m = y.get<std::string>(n["model"], "keypoints.model", "gaussian or openpose");
-    if (m == "openpose") k = KeypointNoiseConfig::openpose();
-    else if (m != "gaussian") y.fail_at(n["model"], "keypoints.model", "expected gaussian or openpose, found '" + m + "'");
-  }
-  y.numbers(n, "keypoints.",
-                    {{"noise_px", &k.noise_px, 0, 1000},
-                     {"dropout", &k.dropout, 0, 1},
-                     {"occluded_dropout", &k.occluded_dropout, 0, 1},
-                     {"visible_confidence", &k.visible_confidence, 0, 1},
-                     {"occluded_confidence", &k.occluded_confidence, 0, 1},
-                     {"confidence_jitter", &k.confidence_jitter, 0, 1},
-                     {"depth_tolerance_m", &k.depth_tolerance_m, 0, 10},
-                     {"scale_error_multiple", &k.scale_error_multiple, 0, 100},
-                     {"swap_probability", &k.swap_probability, 0, 1},
-                     {"swap_probability_side", &k.swap_probability_side, 0, 1},
-                     {"swap_confidence_scale", &k.swap_confidence_scale, 0, 1},
-                     {"confidence_falloff", &k.confidence_falloff, 1e-3, 1000}},
-                    {}, {"model"});
-  // A key of the other model would be silently ignored: say so instead.
-  const bool openpose = k.model == KeypointErrorModel::openpose;
-  for (const char* key : {"scale_error_multiple", "swap_probability", "swap_probability_side", "swap_confidence_scale",
-                          "confidence_falloff"})
-    if (!openpose && n[key])
-      y.fail_at(n[key], std::string("keypoints.") + key, "applies to model: openpose only (the default model is gaussian)");
-  if (openpose && n["noise_px"])
-    y.fail_at(n["noise_px"], "keypoints.noise_px",
-              "applies to model: gaussian only (openpose sizes the error by the person: scale_error_multiple)");
-  validate_keypoint_noise(k, y.file + ": keypoints");
-}
 
 void parse_splits(const StrictYaml& y, const YAML::Node& n, SynthConfig& c) {
   y.check_keys(n, "splits.", {"val", "test", "place"});
@@ -810,6 +778,41 @@ void write_timing_json(const SynthSummary& summary, const fs::path& out) {
   write_text_atomically((out / "timing.json").string(), t.dump(2) + "\n");
 }
 }  // namespace
+
+void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& n, KeypointNoiseConfig& k, const std::string& key) {
+  const std::string dot = key + ".";
+  // The model first: it sets the other keys' defaults and which keys apply.
+  if (n.IsMap() && n["model"]) {
+    const std::string m = y.get<std::string>(n["model"], dot + "model", "gaussian or openpose");
+    if (m == "openpose") k = KeypointNoiseConfig::openpose();
+    else if (m == "gaussian") k = KeypointNoiseConfig();
+    else y.fail_at(n["model"], dot + "model", "expected gaussian or openpose, found '" + m + "'");
+  }
+  y.numbers(n, dot,
+                    {{"noise_px", &k.noise_px, 0, 1000},
+                     {"dropout", &k.dropout, 0, 1},
+                     {"occluded_dropout", &k.occluded_dropout, 0, 1},
+                     {"visible_confidence", &k.visible_confidence, 0, 1},
+                     {"occluded_confidence", &k.occluded_confidence, 0, 1},
+                     {"confidence_jitter", &k.confidence_jitter, 0, 1},
+                     {"depth_tolerance_m", &k.depth_tolerance_m, 0, 10},
+                     {"scale_error_multiple", &k.scale_error_multiple, 0, 100},
+                     {"swap_probability", &k.swap_probability, 0, 1},
+                     {"swap_probability_side", &k.swap_probability_side, 0, 1},
+                     {"swap_confidence_scale", &k.swap_confidence_scale, 0, 1},
+                     {"confidence_falloff", &k.confidence_falloff, 1e-3, 1000}},
+                    {}, {"model"});
+  // A key of the other model would be silently ignored: say so instead.
+  const bool openpose = k.model == KeypointErrorModel::openpose;
+  for (const char* name : {"scale_error_multiple", "swap_probability", "swap_probability_side", "swap_confidence_scale",
+                          "confidence_falloff"})
+    if (!openpose && n[name])
+      y.fail_at(n[name], dot + name, "applies to model: openpose only (the default model is gaussian)");
+  if (openpose && n["noise_px"])
+    y.fail_at(n["noise_px"], dot + "noise_px",
+              "applies to model: gaussian only (openpose sizes the error by the person: scale_error_multiple)");
+  validate_keypoint_noise(k, y.file + ": " + key);
+}
 
 ClipSplit split_clip(int first, int end, double val_fraction, double test_fraction, double place) {
   WEFT_CHECK(first <= end && val_fraction >= 0 && test_fraction >= 0 && val_fraction + test_fraction <= 1 &&

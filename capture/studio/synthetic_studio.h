@@ -85,6 +85,12 @@ struct SynthConfig {
 // errors naming the file, line and key. Paths are relative to the config.
 SynthConfig load_synth_config(const std::string& path);
 SynthConfig parse_synth_config(const std::string& yaml_text, const std::string& name);
+// A `keypoints:` section (the detector error model, synthetic_keypoints.h) into k: `model`
+// first (gaussian or openpose, which sets the other keys' defaults), then the numbers.
+// `key` names the section in messages ("keypoints", "virtual_poses.keypoints"); a key of
+// the other model, or out of range, is an error naming the file, line and key.
+void parse_keypoint_noise(const StrictYaml& y, const YAML::Node& section, KeypointNoiseConfig& k,
+                          const std::string& key = "keypoints");
 
 struct SynthFrameReport {
   int frame = 0;

@@ -23,19 +23,31 @@ Tensor batch_row(const Tensor& t, int64_t b) { return ops::slice(t, 0, b, b + 1)
 Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& frames,
                                const MultiviewSupervision& sup, const std::vector<double>& mask,
                                LandmarkStatistics* stats) {
+  WEFT_CHECK(int64_t(frames.size()) == keypoints.size(0), "multiview_landmark_loss: keypoints ",
+             shape_str(keypoints.shape()), " for ", frames.size(), " frames");
+  std::vector<std::vector<KeypointView>> views(frames.size());
+  for (size_t b = 0; b < frames.size(); ++b)
+    for (int v = 0; v < sup.views(); ++v) views[b].push_back({sup.camera(frames[b], v), sup.detections(frames[b], v)});
+  return landmark_loss_over_views(keypoints, views, mask, stats);
+}
+
+Tensor landmark_loss_over_views(const Tensor& keypoints, const std::vector<std::vector<KeypointView>>& views,
+                                const std::vector<double>& mask, LandmarkStatistics* stats) {
   const int64_t B = keypoints.size(0);
-  WEFT_CHECK(int64_t(frames.size()) == B && keypoints.dim() == 3 && keypoints.size(1) == kBody25Count,
-             "multiview_landmark_loss: keypoints ", shape_str(keypoints.shape()), " for ", frames.size(), " frames");
+  WEFT_CHECK(int64_t(views.size()) == B && keypoints.dim() == 3 && keypoints.size(1) == kBody25Count &&
+                 mask.size() == size_t(kBody25Count),
+             "landmark_loss_over_views: keypoints ", shape_str(keypoints.shape()), " for ", views.size(),
+             " samples' views and a mask of ", mask.size());
   std::vector<Tensor> projected;
   std::vector<double> detections, confidence;
   double error_sum = 0;
   int error_count = 0;
   for (int64_t b = 0; b < B; ++b) {
     const Vertices K = sample_vertices(keypoints, b);
-    for (int v = 0; v < sup.views(); ++v) {
-      const Camera& cam = sup.camera(frames[b], v);
+    for (const KeypointView& view : views[b]) {
+      const Camera& cam = view.camera;
       if (!in_front(cam, K)) continue;
-      const Body25& d = sup.detections(frames[b], v);
+      const Body25& d = view.detections;
       const double w = 1.0 / cam.width;
       projected.push_back(ops::scale(ops::project_points(batch_row(keypoints, b), pinhole(cam)), w));
       for (int m = 0; m < kBody25Count; ++m) {
@@ -57,8 +69,9 @@ Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& 
   if (confidence_sum <= 0) return ops::scale(ops::sum(keypoints), 0.0);
   const Tensor p = ops::concat(projected, 0);
   // landmark_loss sums over keypoints and averages over its n rows: make it the mean over detections.
-  return ops::scale(landmark_loss(p, Tensor::from_data({n, kBody25Count, 2}, detections, DType::F32),
-                                  Tensor::from_data({n, kBody25Count}, confidence, DType::F32)),
+  const DType dt = keypoints.dtype();
+  return ops::scale(landmark_loss(p, Tensor::from_data({n, kBody25Count, 2}, detections, dt),
+                                  Tensor::from_data({n, kBody25Count}, confidence, dt)),
                     double(n) / confidence_sum);
 }
 

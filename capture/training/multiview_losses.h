@@ -13,6 +13,7 @@
 #include "capture/character/character.h"
 #include "geometry/mesh.h"
 #include "capture/dataset/multiview_supervision.h"
+#include "capture/model/global_pose.h"
 #include "graph/tensor.h"
 
 namespace weft::capture {
@@ -26,6 +27,10 @@ struct LandmarkStatistics {
 Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& frames,
                                const MultiviewSupervision& supervision, const std::vector<double>& keypoint_mask,
                                LandmarkStatistics* statistics = nullptr);
+// The same over given views: views[b] are sample b's cameras and detections (any number;
+// a view with a keypoint behind its camera is skipped), e.g. virtual_poses.h's.
+Tensor landmark_loss_over_views(const Tensor& keypoints, const std::vector<std::vector<KeypointView>>& views,
+                                const std::vector<double>& keypoint_mask, LandmarkStatistics* statistics = nullptr);
 
 // vertices [B,V,3] world (body and cloth together), faces of that mesh.
 Tensor multiview_silhouette_loss(const Tensor& vertices, const Faces& faces, const std::vector<int>& frames,

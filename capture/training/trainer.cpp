@@ -27,6 +27,7 @@
 #include "capture/training/multiview_losses.h"
 #include "capture/training/silhouette_rays.h"
 #include "capture/training/simulation_loss.h"
+#include "capture/training/virtual_poses.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
 #include "nn/checkpoint.h"
@@ -120,6 +121,18 @@ class Trainer {
       frames.insert(frames.end(), val_->frames().begin(), val_->frames().end());
     }
     supervision_ = std::make_unique<MultiviewSupervision>(info_, frames, cfg_.silhouette_size);
+    if (cfg_.stages[0].steps > 0 && cfg_.stages[0].weights.virtual_landmarks > 0) {
+      WEFT_CHECK(shards_ == 1, cfg_.file, ": virtual_poses: not available with data parallelism yet (", shards_,
+                 " shards); train on one process, or set stages.pose.virtual_landmarks: 0");
+      const auto t0 = Clock::now();
+      virtual_ = std::make_unique<VirtualPoses>(character_, cfg_.virtual_poses, *supervision_, train_->frames(),
+                                                cfg_.network.input_size, cfg_.network.margin, cfg_.augmentation);
+      spdlog::info("virtual poses: {} poses from {} motion(s) at {} fps, retargeted in {:.1f} s; {} per step, {} "
+                   "views each, {} detector model",
+                   virtual_->poses(), cfg_.virtual_poses.motions.size(), cfg_.virtual_poses.fps, seconds_since(t0),
+                   cfg_.virtual_poses.batch_size, cfg_.virtual_poses.views,
+                   cfg_.virtual_poses.keypoints.model == KeypointErrorModel::openpose ? "openpose" : "gaussian");
+    }
     bool with_3d = false;
     for (const StageConfig& s : cfg_.stages) with_3d |= s.steps > 0 && s.weights.keypoints_3d > 0;
     if (with_3d) triangulate_frames(frames);
@@ -217,6 +230,15 @@ class Trainer {
   Faces faces_;
   std::unique_ptr<SyntheticDataset> train_, val_;
   std::unique_ptr<MultiviewSupervision> supervision_;
+  std::unique_ptr<VirtualPoses> virtual_;  // the pose stage's virtual poses (null: none)
+  // L_lm of the lifting branch alone on the step's virtual poses (virtual_poses.h).
+  Tensor virtual_landmark_term(int64_t step, LandmarkStatistics* stats) const {
+    const VirtualBatch v = virtual_->batch(cfg_.seed, step);
+    const Tensor out = nets_.pose_from_keypoints(v.input);
+    const SampleViews views = sample_views(v.input.cameras, v.views, model_.keypoint_mask(), DType::F32);
+    const CapturePrediction p = model_.predict(out, Tensor(), views, false);
+    return landmark_loss_over_views(p.keypoints, v.views, model_.keypoint_mask(), stats);
+  }
   ArapTerms body_arap_, cloth_arap_;
   AttachmentTerms attachment_;
   std::map<int, Vertices> gt_keypoints_;
@@ -510,6 +532,12 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
     LandmarkStatistics stats;
     std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
     times.lap("losses", t);
+    if (stage.kind == StageKind::pose && stage.weights.virtual_landmarks > 0) {
+      LandmarkStatistics virtual_stats;
+      terms["virtual_landmarks"] = virtual_landmark_term(step, &virtual_stats);
+      add("virtual_keypoint_px", share, virtual_stats.mean_error_px);
+      times.lap("virtual poses (detections and lifting branch)", t);
+    }
     if (simulating) {
       const Tensor sim = simulation_term(p, simulated.get());
       if (sim.defined()) terms["simulation"] = sim;
@@ -537,7 +565,7 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   static const std::vector<std::string> kFigures = [] {
     std::vector<std::string> names;
     for (const LossTerm& term : loss_terms()) names.push_back(term.name);
-    names.insert(names.end(), {"keypoint_px", "total"});
+    names.insert(names.end(), {"keypoint_px", "virtual_keypoint_px", "total"});
     return names;
   }();
   static const physics::StepStatus kFailures[] = {physics::StepStatus::max_iterations,

@@ -38,6 +38,9 @@ const std::vector<LossTerm>& loss_terms() {
       {"simulation", &LossWeights::simulation, "L_sim: squared distance of the predicted cloth to its simulation"},
       {"lumbopelvic", &LossWeights::lumbopelvic,
        "L_lp: squared distance of the pelvis's up axis to where the human lumbopelvic share of the trunk's lean puts it"},
+      {"virtual_landmarks", &LossWeights::virtual_landmarks,
+       "L_lm of PoseNet's lifting branch alone on virtual poses: motions no camera filmed, their detections drawn "
+       "from the detector error model in the dataset's cameras"},
   };
   return table;
 }
@@ -72,7 +75,11 @@ void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
   if (s.kind == StageKind::pose && (s.weights.silhouette > 0 || s.weights.arap > 0 || s.weights.cloth_arap > 0 ||
                                     s.weights.attachment > 0 || s.weights.simulation > 0))
     y.fail_at(n, where + "landmarks",
-              "the pose stage trains PoseNet on landmarks, keypoints_3d and lumbopelvic only: other weights must be 0");
+              "the pose stage trains PoseNet on landmarks, keypoints_3d, lumbopelvic and virtual_landmarks only: "
+              "other weights must be 0");
+  if (s.kind != StageKind::pose && s.weights.virtual_landmarks > 0)
+    y.fail_at(n["virtual_landmarks"], where + "virtual_landmarks",
+              "PoseNet learns in the pose stage only: the virtual poses belong there");
   if (s.kind == StageKind::warmup && s.weights.simulation > 0)
     y.fail_at(n["simulation"], where + "simulation", "the warm start has no simulation loss (that is the physics stage)");
 }
@@ -87,7 +94,7 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
                           "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
-                          "shards", "oracle_pose", "physics", "augmentation", "lumbar_share"});
+                          "shards", "oracle_pose", "physics", "augmentation", "lumbar_share", "virtual_poses"});
   TrainingConfig c;
   c.file = name;
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
@@ -100,7 +107,8 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
              {"checkpoint_every", &c.checkpoint_every, 1, 1e8},
              {"keep_checkpoints", &c.keep_checkpoints, 1, 1000},
              {"shards", &c.shards, 0, 4096}},
-            {"seed", "network", "stages", "oracle_pose", "physics", "augmentation"});
+            {"seed", "network", "stages", "oracle_pose", "physics", "augmentation", "virtual_poses"});
+  if (root["virtual_poses"]) c.virtual_poses = parse_virtual_pose_config(y, root["virtual_poses"]);
   if (root["augmentation"]) c.augmentation = parse_augmentation(y, root["augmentation"], "augmentation");
   if (root["oracle_pose"]) c.oracle_pose = y.get<bool>(root["oracle_pose"], "oracle_pose", "true or false");
   if (root["network"]) parse_network_config(y, root["network"], c.network);
@@ -115,6 +123,14 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   for (StageConfig& s : c.stages)
     if (const YAML::Node n = st[stage_name(s.kind)]) parse_stage(y, n, s);
   if (c.total_steps() == 0) y.fail_at(st, "stages", "every stage has 0 steps: nothing to train");
+  if (c.stages[0].weights.virtual_landmarks > 0) {
+    if (!c.virtual_poses.enabled())
+      y.fail_at(st["pose"]["virtual_landmarks"], "stages.pose.virtual_landmarks",
+                "weighs the virtual poses' loss, but the config has no virtual_poses section (motions, mapping)");
+    if (!c.network.keypoint_input)
+      y.fail_at(st["pose"]["virtual_landmarks"], "stages.pose.virtual_landmarks",
+                "the virtual poses train PoseNet's lifting branch: set network.keypoint_input: true");
+  }
   if (const YAML::Node n = root["physics"]) {
     PhysicsConfig& p = c.physics;
     y.numbers(n, "physics.",

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "capture/dataset/augmentation.h"
+#include "capture/training/virtual_poses.h"
 #include "capture/model/model_folder.h"
 #include "capture/model/network_config.h"
 
@@ -23,6 +24,7 @@ struct LossWeights {
   double attachment = 0;  // L_att
   double simulation = 0;  // L_sim
   double lumbopelvic = 0; // L_lp: the pelvis's share of the trunk's lean (a prior; deformation/losses.h)
+  double virtual_landmarks = 0;  // L_lm of the lifting branch alone on virtual poses (virtual_poses.h)
 };
 
 // The loss terms of training, one entry each: `name` is the key of its weight under
@@ -102,6 +104,9 @@ struct TrainingConfig {
   // evaluation read the images as they are.
   AugmentationOptions augmentation;
   PhysicsConfig physics;
+  // Poses no camera filmed, for the lifting branch (stages.pose.virtual_landmarks weighs
+  // their L_lm; capture/training/virtual_poses.h). Off without a virtual_poses section.
+  VirtualPoseConfig virtual_poses;
 
   int total_steps() const;
   // The stage of global step `step` (1-based) and the step it starts after.

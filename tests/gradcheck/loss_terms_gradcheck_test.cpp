@@ -7,8 +7,11 @@
 #include <cmath>
 
 #include "capture/deformation/losses.h"
+#include "capture/studio/studio_rig.h"
+#include "capture/training/multiview_losses.h"
 #include "capture/training/simulation_loss.h"
 #include "capture/training/training_config.h"
+#include "graph/error.h"
 #include "tests/gradcheck/cases.h"
 
 namespace weft::testing {
@@ -68,6 +71,31 @@ WEFT_GRADCHECK_CASES(loss_terms) {
                                  uniform64(g, {2, 4}, 0, 1)};
     };
     c.function = [](const std::vector<Tensor>& in) { return capture::landmark_loss(in[0], in[1], in[2]); };
+    cases.push_back(c);
+  }
+  {
+    // The whole term: keypoints [2,25,3] projected into two views each (one sample's first
+    // camera in front, the other from the side) against detections with confidences.
+    GradcheckCase c;
+    c.op = "project_points";
+    c.name = case_prefix("virtual_landmarks") + " keypoints [2,25,3] in 2 views each, detections, confidences";
+    c.make_inputs = [](Generator& g) { return std::vector<Tensor>{uniform64(g, {2, capture::kBody25Count, 3}, -0.5, 0.5)}; };
+    c.function = [](const std::vector<Tensor>& in) {
+      std::vector<std::vector<capture::KeypointView>> views(2);
+      for (int b = 0; b < 2; ++b)
+        for (int v = 0; v < 2; ++v) {
+          const double azimuth = 0.7 * v + 0.3 * b;
+          capture::KeypointView kv;
+          kv.camera = capture::look_at_camera("cam", Eigen::Vector3d(3 * std::sin(azimuth), 0.4, 3 * std::cos(azimuth)),
+                                              Eigen::Vector3d::Zero(), 64, 48, 50);
+          for (int m = 0; m < capture::kBody25Count; ++m)
+            kv.detections.row(m) << 5 + 2.1 * m + 3 * v, 40 - 1.3 * m + b, m % 5 == 0 ? 0.0 : 0.1 + 0.03 * m;
+          views[b].push_back(kv);
+        }
+      std::vector<double> mask(capture::kBody25Count, 1.0);
+      mask[3] = 0;
+      return capture::landmark_loss_over_views(in[0], views, mask);
+    };
     cases.push_back(c);
   }
   {
@@ -162,17 +190,33 @@ TEST(LossTermCoverage, EveryLossCaseNamesATermOfTheTable) {
   }
 }
 
+// Terms of PoseNet's lifting branch alone: weights of the pose stage only.
+bool pose_stage_only(const LossTerm& t) { return std::string(t.name) == "virtual_landmarks"; }
+
 TEST(LossTermCoverage, EveryTermIsAStageWeightOfTheConfig) {
-  // A physics stage that sets every term's weight parses, and each key lands in its own field.
+  // A physics stage that sets every term's weight parses, and each key lands in its own
+  // field; a pose-stage-only term there is an error naming it.
   std::string yaml = "stages:\n  physics: {steps: 1, batch_size: 8";
   double value = 1;
-  for (const LossTerm& t : loss_terms()) yaml += ", " + std::string(t.name) + ": " + std::to_string(value++);
+  for (const LossTerm& t : loss_terms())
+    if (!pose_stage_only(t)) yaml += ", " + std::string(t.name) + ": " + std::to_string(value++);
   yaml += "}\n";
   const capture::TrainingConfig cfg = capture::parse_training_config(yaml, "loss_terms.yaml", ".");
   const capture::StageConfig& physics = cfg.stages.at(2);
   ASSERT_EQ(physics.kind, capture::StageKind::physics);
   value = 1;
-  for (const LossTerm& t : loss_terms()) EXPECT_EQ(physics.weights.*t.weight, value++) << t.name;
+  for (const LossTerm& t : loss_terms())
+    if (!pose_stage_only(t)) EXPECT_EQ(physics.weights.*t.weight, value++) << t.name;
+  for (const LossTerm& t : loss_terms()) {
+    if (!pose_stage_only(t)) continue;
+    const std::string bad = "stages:\n  physics: {steps: 1, batch_size: 8, " + std::string(t.name) + ": 1}\n";
+    try {
+      capture::parse_training_config(bad, "loss_terms.yaml", ".");
+      ADD_FAILURE() << t.name << " accepted in the physics stage";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("stages.physics.") + t.name), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace
