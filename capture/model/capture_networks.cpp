@@ -82,6 +82,7 @@ CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig
   deformation_net->fc->weight.fill(0.0);
   deformation_net->fc->bias.fill(0.0);
   input_size_ = config.input_size;
+  image_input_ = config.image_input;
   if (config.keypoint_input) {
     Generator gen(seed + 2);
     constexpr int64_t hidden = 512;
@@ -97,6 +98,7 @@ CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig
 }
 
 Tensor CaptureNetworks::pose(const Batch& batch) {
+  if (!image_input_) return pose_from_keypoints(batch);
   const Tensor image_out = pose_net->forward(batch.images);
   if (!pose_lift) return image_out;
   return ops::add(image_out, pose_lift->forward(keypoint_lift_input(batch, input_size_)));
@@ -109,7 +111,8 @@ Tensor CaptureNetworks::pose_from_keypoints(const Batch& batch) const {
 
 std::vector<nn::NamedTensor> CaptureNetworks::pose_parameters() const {
   std::vector<nn::NamedTensor> params;
-  for (nn::NamedTensor p : pose_net->named_parameters()) params.push_back({"pose_net." + p.name, p.tensor});
+  if (image_input_)
+    for (nn::NamedTensor p : pose_net->named_parameters()) params.push_back({"pose_net." + p.name, p.tensor});
   if (pose_lift)
     for (nn::NamedTensor p : pose_lift->named_parameters()) params.push_back({"pose_lift." + p.name, p.tensor});
   return params;

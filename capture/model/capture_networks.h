@@ -57,14 +57,16 @@ class CaptureNetworks : public nn::Module {
   CaptureNetworks(const Character& character, const NetworkConfig& config, uint64_t seed);
   Tensor forward(const Tensor& x) override;  // not used: call pose / deformation_net
   // PoseNet's output [B, pose_outputs()] for a batch: the ResNet on the images plus, with
-  // network.keypoint_input, the lifting branch on the input view's detections (pose_lift).
+  // network.keypoint_input, the lifting branch on the input view's detections (pose_lift);
+  // with network.image_input false, the lifting branch alone (pose_net is not run).
   // Train or evaluation mode is pose_net's (the branch has no batch norm).
   Tensor pose(const Batch& batch);
   // The lifting branch alone on a batch's detections and crop cameras (no images): the
   // whole of PoseNet's output for poses no camera filmed (capture/training/virtual_poses.h).
   // An error without network.keypoint_input.
   Tensor pose_from_keypoints(const Batch& batch) const;
-  // PoseNet's trainable parameters, named as in checkpoints ("pose_net.*", "pose_lift.*").
+  // PoseNet's trainable parameters, named as in checkpoints ("pose_net.*", "pose_lift.*";
+  // without image input, "pose_lift.*" only).
   std::vector<nn::NamedTensor> pose_parameters() const;
   std::shared_ptr<nn::ResNet> pose_net, deformation_net;
   // The lifting branch (null without network.keypoint_input): an MLP from the detections
@@ -76,6 +78,7 @@ class CaptureNetworks : public nn::Module {
  private:
   int64_t pose_outputs_ = 0, deformation_outputs_ = 0;
   int input_size_ = 128;
+  bool image_input_ = true;  // network.image_input: false, PoseNet is the lifting branch alone
 };
 
 // The lifting branch's input [B, 77] from a batch: per BODY_25 keypoint its crop position

@@ -19,6 +19,9 @@ struct NetworkConfig {
   // the labelled keypoints tell the person's left from right, which the pixels of a
   // front and a back view barely do.
   bool keypoint_input = false;
+  // false: PoseNet is the lifting branch alone (needs keypoint_input), the image network
+  // does not run: a lifting network from the detections, as the field's 2D-to-3D lifters.
+  bool image_input = true;
 };
 
 // Reads the `network` section `n` into `c` (absent keys keep their value); errors name the

@@ -16,7 +16,11 @@
 #include "capture/training/trainer.h"
 #include "capture/training/training_config.h"
 #include "capture/training/virtual_poses.h"
+#include "capture/model/capture_networks.h"
+#include "capture/model/network_config.h"
+#include "graph/autograd.h"
 #include "graph/error.h"
+#include "ops/ops.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
 
@@ -176,6 +180,49 @@ TEST(VirtualPoses, ConfigErrorsNameTheKey) {
   std::string no_branch = base;
   no_branch.replace(no_branch.find(", keypoint_input: true"), 22, "");
   EXPECT_NE(error_of(no_branch).find("network.keypoint_input"), std::string::npos) << error_of(no_branch);
+}
+
+// network.image_input: false makes PoseNet the lifting branch alone: its output is the
+// branch's on the detections whatever the images, and only the branch trains.
+TEST(VirtualPoses, PoseNetWithoutImagesIsTheLiftingBranchAlone) {
+  REQUIRE_HUMAN();
+  const fs::path data = weft::capture::testing::tiny_dataset();
+  const DatasetInfo info = read_dataset_info(data.string());
+  const Character ch = load_character(info.character);
+  NetworkConfig config;
+  config.input_size = 64;
+  config.keypoint_input = true;
+  config.image_input = false;
+  DatasetOptions options;
+  options.input_size = config.input_size;
+  const SyntheticDataset ds(data.string(), options);
+  Batch batch = make_batch({ds.load(0), ds.load(1)});
+  CaptureNetworks nets(ch, config, 5);
+  for (const auto& p : nets.pose_parameters()) EXPECT_EQ(p.name.rfind("pose_lift.", 0), 0u) << p.name;
+  // A non-zero branch, so that the comparison below can fail.
+  for (auto p : nets.pose_lift->named_parameters()) p.tensor.fill(0.01);
+  weft::NoGradGuard no_grad;
+  const weft::Tensor a = nets.pose(batch);
+  batch.images = weft::ops::scale(batch.images, 0.0);  // other pixels: the same output
+  const weft::Tensor b = nets.pose(batch), lift = nets.pose_from_keypoints(batch);
+  ASSERT_EQ(a.numel(), b.numel());
+  double norm = 0;
+  for (int64_t i = 0; i < a.numel(); ++i) {
+    ASSERT_EQ(a.data<float>()[i], b.data<float>()[i]);
+    ASSERT_EQ(a.data<float>()[i], lift.data<float>()[i]);
+    norm += std::abs(a.data<float>()[i]);
+  }
+  EXPECT_GT(norm, 0.0);
+  // Without either input there is no PoseNet: an error naming the key.
+  StrictYaml y;
+  y.file = "net.yaml";
+  NetworkConfig c;
+  try {
+    parse_network_config(y, y.parse("{image_input: false}"), c);
+    ADD_FAILURE() << "no input accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("network.image_input"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
