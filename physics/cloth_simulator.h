@@ -49,6 +49,10 @@ struct SimulationSettings {
   // Outside a body, the penalty summed over its faces, edges and vertices in the band
   // (CollisionEnergy::set_smooth_creases): no kink on a concave crease's medial surface.
   bool collision_smooth_creases = false;
+  // The per-vertex step filter bounds only a vertex's approach along its closest
+  // obstacle point's normal and leaves its slide along the body free
+  // (CollisionEnergy::set_planar_step_bounds); false scales the vertex's whole move.
+  bool collision_planar_step_bounds = true;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
   // creeps at under ε_v (about 0.48·ε_v on a 20° slope with μ = 0.5). 1 cm/s (issue 41,
