@@ -7,7 +7,8 @@
 //                        [automatic|simplicial|supernodal] [TOLERANCE] [project|exact]
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
-// cg_relative_tolerance, start_from_prediction (0/1),
+// cg_relative_tolerance, start_from_prediction (0/1), start_filter_per_vertex (0/1),
+// start_following_body (0/1),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
 // (0/1), planar_step_bounds (0/1: the per-vertex collision bound along the normal only, or
 // scaling the whole move), smooth_creases (0/1: the body's concave creases, as weft synth's default),
@@ -152,6 +153,8 @@ int main(int argc_all, char** argv_all) {
     else if (key == "collision_stiffness") s.collision_stiffness = std::atof(value.c_str());
     else if (key == "collision_thickness") s.collision_thickness = std::atof(value.c_str());
     else if (key == "start_from_prediction") s.start_from_prediction = value != "0";
+    else if (key == "start_filter_per_vertex") s.start_filter_per_vertex = value != "0";
+    else if (key == "start_following_body") s.start_following_body = value != "0";
     else if (key == "membrane" && (value == "stvk" || value == "tension_field"))
       s.material.membrane = value == "stvk" ? MembraneModel::stvk : MembraneModel::tension_field;
     else if (key == "compression_ratio") s.material.compression_ratio = std::atof(value.c_str());

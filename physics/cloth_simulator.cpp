@@ -121,9 +121,15 @@ NewtonReport ClothSimulator::advance(Positions& x, Positions& v, double h) {
   // an obstacle (Energy::max_step).
   Positions x_new = x_start;
   if (settings_.start_from_prediction) {
-    const Positions dx = x_hat - x_start;
-    const double alpha = solver_->max_step(x_start, dx);
-    if (alpha > 0 && std::isfinite(alpha)) x_new += alpha * dx;
+    Positions dx = x_hat - x_start;
+    if (settings_.start_following_body) friction_->follow_obstacles(dx);
+    if (settings_.start_filter_per_vertex && settings_.newton.per_vertex_step_limits) {
+      solver_->clip_vertex_steps(x_start, dx);
+      x_new += dx;
+    } else {
+      const double alpha = solver_->max_step(x_start, dx);
+      if (alpha > 0 && std::isfinite(alpha)) x_new += alpha * dx;
+    }
   }
   NewtonReport report = solver_->minimize(x_new);
   if (!x_new.allFinite()) {

@@ -210,6 +210,10 @@ double NewtonSolver::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& d
   return alpha;
 }
 
+void NewtonSolver::clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorXd& dx) const {
+  for (const Energy* en : energies_) en->clip_vertex_steps(x, dx);
+}
+
 double NewtonSolver::search_negative_curvature(const Eigen::VectorXd& g, double reach, Eigen::VectorXd& x_new,
                                               double& e_new, Eigen::VectorXd& x_trial,
                                               NewtonReport& report) const {
@@ -364,7 +368,7 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
       trace.limited_vertices = 0;
       if (options_.per_vertex_step_limits) {
         Eigen::VectorXd limited = d;
-        for (const Energy* en : energies_) en->clip_vertex_steps(x, limited);
+        clip_vertex_steps(x, limited);
         for (int i = 0; i < n_; ++i)
           if (limited.segment<3>(3 * i) != d.segment<3>(3 * i)) ++trace.limited_vertices;
         if (trace.limited_vertices > 0) {

@@ -123,6 +123,8 @@ class NewtonSolver {
   // The step filter: the largest α ≤ 1 that every energy admits for x + α·dx
   // (Energy::max_step).
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
+  // The per-vertex filter: each energy's Energy::clip_vertex_steps applied to dx in turn.
+  void clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorXd& dx) const;
 
  private:
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* h,
