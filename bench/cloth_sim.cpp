@@ -11,7 +11,7 @@
 // start_following_body (0/1),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
 // (0/1), planar_step_bounds (0/1: the per-vertex collision bound along the normal only, or
-// scaling the whole move), step_bound_fraction (the filters' stop, fraction of the band), smooth_creases (0/1: the body's concave creases, as weft synth's default),
+// scaling the whole move), smooth_creases (0/1: the body's concave creases, as weft synth's default),
 // factor_without_weak_pairs (0/1), CHOLMOD's supernode
 // amalgamation nrelax=A,B,C and zrelax=A,B,C, max_iterations (per
 // step; 1 = one linear solve per step, as a linearised implicit Euler like ARCSim's);
@@ -143,7 +143,6 @@ int main(int argc_all, char** argv_all) {
     else if (key == "per_vertex_step_limits") s.newton.per_vertex_step_limits = value != "0";
     else if (key == "smooth_creases") s.collision_smooth_creases = value != "0";
     else if (key == "planar_step_bounds") s.collision_planar_step_bounds = value != "0";
-    else if (key == "step_bound_fraction") s.collision_step_bound_fraction = std::atof(value.c_str());
     else if (key == "factor_without_weak_pairs") s.newton.factor_without_weak_pairs = value != "0";
     else if (key == "nrelax" || key == "zrelax") {  // three comma-separated numbers
       double* out = key == "nrelax" ? s.newton.amalgamation.nrelax : s.newton.amalgamation.zrelax;

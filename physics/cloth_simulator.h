@@ -53,9 +53,6 @@ struct SimulationSettings {
   // obstacle point's normal and leaves its slide along the body free
   // (CollisionEnergy::set_planar_step_bounds); false scales the vertex's whole move.
   bool collision_planar_step_bounds = true;
-  // How close, as a fraction of the band, the step filters let a vertex approach an
-  // obstacle (CollisionEnergy::set_step_bound_fraction).
-  double collision_step_bound_fraction = 0.5;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
   // creeps at under ε_v (about 0.48·ε_v on a 20° slope with μ = 0.5). 1 cm/s (issue 41,

@@ -61,12 +61,6 @@ void CollisionEnergy::set_second_sheet_angle(double degrees) {
   second_sheet_cos_ = degrees > 0 ? std::cos(degrees * M_PI / 180.0) : 2.0;
 }
 
-void CollisionEnergy::set_step_bound_fraction(double fraction) {
-  WEFT_CHECK(std::isfinite(fraction) && fraction > 0 && fraction < 1,
-             "collision: step_bound_fraction must be in (0, 1), got ", fraction);
-  step_bound_fraction_ = fraction;
-}
-
 void CollisionEnergy::set_bodies(std::vector<const BodyMesh*> bodies) {
   bodies_ = std::move(bodies);
   invalidate_cache();
@@ -229,7 +223,7 @@ void CollisionEnergy::step_bound_samples(int i, const Eigen::Vector3d& xi, doubl
   for (size_t b = 0; b < bodies_.size(); ++b) {
     CacheEntry& c = cache_[b][i];
     // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
-    if (c.d_ref - (xi - c.x_ref).norm() - reach >= step_bound_fraction_ * thickness_) continue;
+    if (c.d_ref - (xi - c.x_ref).norm() - reach >= 0.5 * thickness_) continue;
     const DistanceSample s = signed_distance(*bodies_[b], xi);
     c.x_ref = xi;
     c.d_ref = s.distance;
@@ -240,7 +234,7 @@ void CollisionEnergy::step_bound_samples(int i, const Eigen::Vector3d& xi, doubl
 void CollisionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
                                          Eigen::VectorXd& limits) const {
   thread_local std::vector<DistanceSample> samples;
-  const double target = step_bound_fraction_ * thickness_;
+  const double target = 0.5 * thickness_;
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d xi = x.segment<3>(3 * i), step = dx.segment<3>(3 * i);
     step_bound_samples(i, xi, step.norm(), samples);
@@ -260,7 +254,7 @@ void CollisionEnergy::clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorX
     return;
   }
   thread_local std::vector<DistanceSample> samples;
-  const double target = step_bound_fraction_ * thickness_;  // m, the closest a move may bring a vertex
+  const double target = 0.5 * thickness_;  // m, the closest a move may bring a vertex
   const double slide = 2.0 * thickness_;    // m, see the header
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d xi = x.segment<3>(3 * i);

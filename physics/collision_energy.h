@@ -98,14 +98,6 @@ class CollisionEnergy : public Energy {
   // When a vertex's planes disagree (a crease), the clipped move is scaled until it meets
   // them all.
   void clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorXd& dx) const override;
-  // Where both filters stop an approaching vertex, as a fraction of the band: no closer
-  // than fraction·δ to the obstacle (0.5: half the band). Stopped deep in the band, a
-  // vertex feels thousands of times its weight, and Newton on the cubic penalty only
-  // halves that gap per iteration (its force c·gap²/2 has stiffness c·gap: from gap g,
-  // Newton's step goes to g/2 until near the balance); stopped near the band's edge it
-  // starts near its balance. In (0, 1).
-  void set_step_bound_fraction(double fraction);
-  double step_bound_fraction() const { return step_bound_fraction_; }
   // Off: clip_vertex_steps scales the whole move (limit_vertex_steps), as before.
   void set_planar_step_bounds(bool on) { planar_step_bounds_ = on; }
   bool planar_step_bounds() const { return planar_step_bounds_; }
@@ -141,7 +133,6 @@ class CollisionEnergy : public Energy {
   double second_sheet_deg_ = 0, second_sheet_cos_ = 2;  // off: no normal is that far
   bool smooth_creases_ = false;
   bool planar_step_bounds_ = true;
-  double step_bound_fraction_ = 0.5;
   std::vector<SphereObstacle> spheres_;
   std::vector<const BodyMesh*> bodies_;
   // Per body and vertex: where the distance was last queried and its value. Distance is
