@@ -60,7 +60,8 @@ struct SimulationSettings {
   // 2μλ/(ε_v·h) stays about 10× the inertia m/h² (μ = 0.5, λ ≈ m·g, h = 10 ms). IPC's
   // usual 1 mm/s made the kink at the onset of sliding only ε_v·h = 17 µm wide at
   // h = 1/60 s: Newton's worst drape frames back-tracked on it for tens of iterations
-  // while the vertex there crept 10–26 µm per iteration (docs/BENCHMARKS.md).
+  // while the vertex there crept 10–26 µm per iteration; at 1 cm/s the worst frame took 39
+  // Newton iterations instead of 77 (docs/notes/2026-12-06-contact-crawl-levers.md).
   double friction_velocity = 1.0e-2;
   double pin_stiffness = 1.0e4;        // N/m
   double constraint_stiffness = 1.0e2; // N/m, silhouette rays

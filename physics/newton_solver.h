@@ -73,7 +73,7 @@ struct NewtonOptions {
   // smallest limit for every vertex) when the limited move is not a descent direction.
   // On by default (issue 41, decision 1; weft synth already had it): with the whole move
   // scaled, on the 4k drape 77 → 47 Newton iterations in the worst frame, on the 1k skirt
-  // 95 → 54 per frame (docs/BENCHMARKS.md).
+  // 95 → 73 per frame (docs/notes/2026-12-06-contact-crawl-levers.md).
   bool per_vertex_step_limits = true;
 };
 
