@@ -53,6 +53,7 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
                                                  settings_.collision_stiffness);
   collision_->set_second_sheet_angle(settings_.collision_second_sheet_deg);
   collision_->set_smooth_creases(settings_.collision_smooth_creases);
+  collision_->set_planar_step_bounds(settings_.collision_planar_step_bounds);
   friction_ = std::make_unique<FrictionEnergy>(n, *collision_, settings_.friction_velocity,
                                                settings_.time_step / settings_.substeps);
   solver_ = std::make_unique<NewtonSolver>(
@@ -120,9 +121,15 @@ NewtonReport ClothSimulator::advance(Positions& x, Positions& v, double h) {
   // an obstacle (Energy::max_step).
   Positions x_new = x_start;
   if (settings_.start_from_prediction) {
-    const Positions dx = x_hat - x_start;
-    const double alpha = solver_->max_step(x_start, dx);
-    if (alpha > 0 && std::isfinite(alpha)) x_new += alpha * dx;
+    Positions dx = x_hat - x_start;
+    if (settings_.start_following_body) friction_->follow_obstacles(dx);
+    if (settings_.start_filter_per_vertex && settings_.newton.per_vertex_step_limits) {
+      solver_->clip_vertex_steps(x_start, dx);
+      x_new += dx;
+    } else {
+      const double alpha = solver_->max_step(x_start, dx);
+      if (alpha > 0 && std::isfinite(alpha)) x_new += alpha * dx;
+    }
   }
   NewtonReport report = solver_->minimize(x_new);
   if (!x_new.allFinite()) {

@@ -49,14 +49,20 @@ struct SimulationSettings {
   // Outside a body, the penalty summed over its faces, edges and vertices in the band
   // (CollisionEnergy::set_smooth_creases): no kink on a concave crease's medial surface.
   bool collision_smooth_creases = false;
+  // The per-vertex step filter bounds only a vertex's approach along its closest
+  // obstacle point's normal and leaves its slide along the body free
+  // (CollisionEnergy::set_planar_step_bounds); false scales the vertex's whole move.
+  bool collision_planar_step_bounds = true;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
-  // creeps at under ε_v (measured 0.48 mm/s on a 20° slope with μ = 0.5). 1e-3 m/s (IPC's
-  // usual choice): under a millimetre per second, while the static regime's stiffness
-  // 2μλ/(ε_v·h) stays about 100× the inertia m/h² (μ = 0.5, λ ≈ m·g, h = 10 ms); a
-  // smaller ε_v makes static friction stiffer and the onset of sliding a sharper kink
-  // for Newton.
-  double friction_velocity = 1.0e-3;
+  // creeps at under ε_v (about 0.48·ε_v on a 20° slope with μ = 0.5). 1 cm/s (issue 41,
+  // decision 1): creep under 0.17 mm per 1/60 s step, while the static regime's stiffness
+  // 2μλ/(ε_v·h) stays about 10× the inertia m/h² (μ = 0.5, λ ≈ m·g, h = 10 ms). IPC's
+  // usual 1 mm/s made the kink at the onset of sliding only ε_v·h = 17 µm wide at
+  // h = 1/60 s: Newton's worst drape frames back-tracked on it for tens of iterations
+  // while the vertex there crept 10–26 µm per iteration; at 1 cm/s the worst frame took 39
+  // Newton iterations instead of 77 (docs/notes/2026-12-06-contact-crawl-levers.md).
+  double friction_velocity = 1.0e-2;
   double pin_stiffness = 1.0e4;        // N/m
   double constraint_stiffness = 1.0e2; // N/m, silhouette rays
   NewtonOptions newton;
@@ -72,6 +78,14 @@ struct SimulationSettings {
   // Newton's first iterate: x_n + α·h·v_n (the inertial prediction, α ≤ 1 cut by the step
   // filter) instead of x_n.
   bool start_from_prediction = true;
+  // Measured levers (issue 41), both off: the prediction's move cut per vertex
+  // (NewtonSolver::clip_vertex_steps, when the solver's per_vertex_step_limits is on)
+  // instead of one α for the whole move, and vertices in contact starting with the body's
+  // motion along its normal where the body pushes (FrictionEnergy::follow_obstacles).
+  // Per vertex: 1k skirt 36.1 → 26.2 Newton iterations per frame, but the 4k drape 23.1 →
+  // 34.5 and a 3k skirt frame at the cap; following the body: drape 22.0, 1k skirt 40.6.
+  bool start_filter_per_vertex = false;
+  bool start_following_body = false;
 };
 // Throws weft::Error naming the field if a value is non-physical.
 void validate(const SimulationSettings& settings);

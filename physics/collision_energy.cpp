@@ -216,30 +216,72 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
   return energy;
 }
 
+void CollisionEnergy::step_bound_samples(int i, const Eigen::Vector3d& xi, double reach,
+                                         std::vector<DistanceSample>& out) const {
+  out.clear();
+  for (const auto& sphere : spheres_) out.push_back(signed_distance(sphere, xi));
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    CacheEntry& c = cache_[b][i];
+    // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
+    if (c.d_ref - (xi - c.x_ref).norm() - reach >= 0.5 * thickness_) continue;
+    const DistanceSample s = signed_distance(*bodies_[b], xi);
+    c.x_ref = xi;
+    c.d_ref = s.distance;
+    out.push_back(s);
+  }
+}
+
 void CollisionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
                                          Eigen::VectorXd& limits) const {
+  thread_local std::vector<DistanceSample> samples;
+  const double target = 0.5 * thickness_;
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d xi = x.segment<3>(3 * i), step = dx.segment<3>(3 * i);
-    double& alpha = limits[i];
-    auto limit = [&](const DistanceSample& s) {
+    step_bound_samples(i, xi, step.norm(), samples);
+    for (const DistanceSample& s : samples) {
       // Inside the band the penalty's own Hessian already shapes the Newton step.
-      if (!(s.distance >= thickness_)) return;
-      const double target = 0.5 * thickness_;
+      if (!(s.distance >= thickness_)) continue;
       const double approach = -s.gradient.dot(step);
       if (approach > 0 && s.distance - approach < target)
-        alpha = std::min(alpha, (s.distance - target) / approach);
-    };
-    const double reach = step.norm();
-    for (const auto& sphere : spheres_) limit(signed_distance(sphere, xi));
-    for (size_t b = 0; b < bodies_.size(); ++b) {
-      CacheEntry& c = cache_[b][i];
-      // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
-      if (c.d_ref - (xi - c.x_ref).norm() - reach >= 0.5 * thickness_) continue;
-      const DistanceSample s = signed_distance(*bodies_[b], xi);
-      c.x_ref = xi;
-      c.d_ref = s.distance;
-      limit(s);
+        limits[i] = std::min(limits[i], (s.distance - target) / approach);
     }
+  }
+}
+
+void CollisionEnergy::clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorXd& dx) const {
+  if (!planar_step_bounds_) {
+    Energy::clip_vertex_steps(x, dx);
+    return;
+  }
+  thread_local std::vector<DistanceSample> samples;
+  const double target = 0.5 * thickness_;  // m, the closest a move may bring a vertex
+  const double slide = 2.0 * thickness_;    // m, see the header
+  for (int i = 0; i < n_; ++i) {
+    const Eigen::Vector3d xi = x.segment<3>(3 * i);
+    Eigen::Vector3d step = dx.segment<3>(3 * i);
+    step_bound_samples(i, xi, step.norm(), samples);
+    bool clipped = false;
+    double nearest = std::numeric_limits<double>::infinity();  // m, over the bounding planes
+    for (const DistanceSample& s : samples) {
+      if (!(s.distance >= thickness_)) continue;  // in the band: the penalty's Hessian
+      const double excess = -s.gradient.dot(step) - (s.distance - target);  // m past the plane's bound
+      if (excess > 0) {
+        step += excess * s.gradient;  // only the normal component changes
+        clipped = true;
+      }
+      nearest = std::min(nearest, s.distance);
+    }
+    if (!clipped) continue;
+    double alpha = 1.0;  // a projection onto one plane may approach another
+    for (const DistanceSample& s : samples) {
+      if (!(s.distance >= thickness_)) continue;
+      const double approach = -s.gradient.dot(step);
+      if (approach > s.distance - target) alpha = std::min(alpha, (s.distance - target) / approach);
+    }
+    const double cap = std::max(nearest - target, slide);
+    const double length = alpha * step.norm();
+    if (length > cap) alpha *= cap / length;
+    dx.segment<3>(3 * i) = std::max(alpha, 0.0) * step;
   }
 }
 

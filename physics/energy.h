@@ -44,6 +44,17 @@ class Energy {
     (void)dx;
     (void)limits;
   }
+  // The per-vertex step filter (NewtonOptions::per_vertex_step_limits): replaces each
+  // vertex's move dx_i (m) by the part of it this energy admits from x. By default the
+  // move is scaled by limit_vertex_steps' fraction; an energy whose bound is a half-space
+  // (the collision's closest-point plane) instead clips only the component that crosses
+  // it. The solver applies the energies in turn, each to what the previous ones left.
+  virtual void clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorXd& dx) const {
+    Eigen::VectorXd limits = Eigen::VectorXd::Ones(x.size() / 3);
+    limit_vertex_steps(x, dx, limits);
+    for (Eigen::Index i = 0; i < limits.size(); ++i)
+      if (limits[i] < 1.0) dx.segment<3>(3 * i) *= limits[i] > 0.0 ? limits[i] : 0.0;
+  }
   // The largest α in (0, 1] this energy lets the whole step x + α·dx take: the smallest
   // of its per-vertex limits (a filter applied before the line search).
   virtual double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {

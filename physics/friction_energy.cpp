@@ -144,6 +144,15 @@ double FrictionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
   return energy;
 }
 
+void FrictionEnergy::follow_obstacles(Eigen::VectorXd& dx) const {
+  for (const Contact& c : contacts_) {
+    const Eigen::Vector3d n = c.T.col(0).cross(c.T.col(1));  // outward normal at the step's start
+    auto move = dx.segment<3>(3 * c.vertex);
+    const double inertial = n.dot(move), body = n.dot(c.motion);  // m along n
+    move += (std::max(inertial, body) - inertial) * n;
+  }
+}
+
 void FrictionEnergy::limit_vertex_steps(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
                                         Eigen::VectorXd& limits) const {
   const double eps = smoothing();

@@ -54,6 +54,13 @@ class FrictionEnergy : public Energy {
   // whole garment at one vertex's reversal.
   double max_step(const Eigen::VectorXd&, const Eigen::VectorXd&) const override { return 1.0; }
 
+  // A warm start that follows the obstacles (SimulationSettings::start_following_body):
+  // replaces each contact vertex's move dx_i (m, over the step) by its tangential part
+  // plus the normal part of its obstacle point's displacement Δo, so a vertex on a body
+  // that pushes into the cloth starts where the body carries it instead of where its
+  // old velocity would (a body pulling away leaves it at its inertial move's normal part
+  // if that is larger: never into the body further than before).
+  void follow_obstacles(Eigen::VectorXd& dx) const;
   int num_contacts() const { return static_cast<int>(contacts_.size()); }
   double smoothing() const { return velocity_threshold_ * h_; }  // ε, m
 

@@ -210,10 +210,8 @@ double NewtonSolver::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& d
   return alpha;
 }
 
-Eigen::VectorXd NewtonSolver::vertex_step_limits(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  Eigen::VectorXd limits = Eigen::VectorXd::Ones(n_);
-  for (const Energy* en : energies_) en->limit_vertex_steps(x, dx, limits);
-  return limits;
+void NewtonSolver::clip_vertex_steps(const Eigen::VectorXd& x, Eigen::VectorXd& dx) const {
+  for (const Energy* en : energies_) en->clip_vertex_steps(x, dx);
 }
 
 double NewtonSolver::search_negative_curvature(const Eigen::VectorXd& g, double reach, Eigen::VectorXd& x_new,
@@ -369,14 +367,11 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
       double alpha = 1.0;
       trace.limited_vertices = 0;
       if (options_.per_vertex_step_limits) {
-        const Eigen::VectorXd limits = vertex_step_limits(x, d);
-        if (limits.minCoeff() < 1.0) {
-          Eigen::VectorXd limited = d;
-          for (int i = 0; i < n_; ++i)
-            if (limits[i] < 1.0) {
-              limited.segment<3>(3 * i) *= std::max(limits[i], 0.0);
-              ++trace.limited_vertices;
-            }
+        Eigen::VectorXd limited = d;
+        clip_vertex_steps(x, limited);
+        for (int i = 0; i < n_; ++i)
+          if (limited.segment<3>(3 * i) != d.segment<3>(3 * i)) ++trace.limited_vertices;
+        if (trace.limited_vertices > 0) {
           if (g.dot(limited) < 0)
             d.swap(limited);
           else
