@@ -19,13 +19,19 @@ const char* kStages = "stages:\n  pose: {steps: 4, landmarks: 1}\n";
 }  // namespace
 
 TEST(TrainingConfig, ShippedConfigsParse) {
-  for (const char* name : {"tiny", "default", "paper"}) {
+  for (const char* name : {"tiny", "default", "demo", "lifter", "paper"}) {
     const TrainingConfig c = load_training_config(repo_file(std::string("configs/train/") + name + ".yaml"));
     EXPECT_GT(c.total_steps(), 0) << name;
     ASSERT_EQ(c.stages.size(), 3u);
     EXPECT_EQ(c.stages[0].kind, StageKind::pose);
     EXPECT_GT(c.stages[2].steps, 0) << name << ": the physics stage";
   }
+  // The lifter: PoseNet without images, trained on virtual poses too.
+  const TrainingConfig lifter = load_training_config(repo_file("configs/train/lifter.yaml"));
+  EXPECT_FALSE(lifter.network.image_input);
+  EXPECT_TRUE(lifter.network.keypoint_input);
+  EXPECT_TRUE(lifter.virtual_poses.enabled());
+  EXPECT_GT(lifter.stages[0].weights.virtual_landmarks, 0);
 }
 
 TEST(TrainingConfig, TheGarmentsArapFollowsTheBodysUnlessGiven) {
@@ -56,7 +62,7 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, lr: -1}\n", "c.yaml"); },
                {"c.yaml", "stages.pose.lr"});
   expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, silhouette: 1}\n", "c.yaml"); },
-               {"c.yaml", "landmarks, keypoints_3d and lumbopelvic only"});
+               {"c.yaml", "landmarks, keypoints_3d, lumbopelvic and virtual_landmarks only"});
   // The lumbopelvic prior and its share: a pose-stage weight, and a share in [0, 1].
   const TrainingConfig lp =
       parse_training_config("lumbar_share: 0.7\nstages:\n  pose: {steps: 4, landmarks: 1, lumbopelvic: 0.5}\n", "c.yaml");

@@ -46,8 +46,9 @@ const std::map<std::string, std::set<std::string>>& may_include() {
       {"capture/inference", with_floor({"capture/model", "capture/garment", "capture/dataset", "capture/character",
                                         "capture/motion", "capture/render", "capture/io", "nn"})},
       {"capture/training",
-       with_floor({"capture/model", "capture/garment", "capture/evaluation", "capture/deformation", "capture/dataset",
-                   "capture/character", "capture/render", "capture/plots", "capture/io", "nn", "ops", "physics"})},
+       with_floor({"capture/model", "capture/studio", "capture/garment", "capture/evaluation", "capture/deformation",
+                   "capture/dataset", "capture/character", "capture/motion", "capture/render", "capture/plots",
+                   "capture/io", "nn", "ops", "physics"})},
       {"capture/adaptation", with_floor({"capture/training", "capture/inference", "capture/model", "capture/dataset",
                                          "capture/io"})},
   };
