@@ -201,6 +201,45 @@ TEST(Infer, BadInputsNameTheFileAndLeaveNoCapture) {
   EXPECT_FALSE(fs::exists(fs::path(o.out) / "capture.json"));
 }
 
+// --weights: the folder's own weights named explicitly capture exactly what the folder
+// does; other weights of the same networks capture something else; a missing file is an
+// error naming it.
+TEST(Infer, WeightsReplaceTheFoldersAndAMissingFileIsNamed) {
+  const Fixture& f = fixture();
+  const fs::path root = infer_scratch_root() / "weights";
+  fs::create_directories(root);
+  CaptureOptions o;
+  o.model = f.model.string();
+  o.input = (f.data / "images" / "cam02").string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = "cam02";
+  o.keypoints = (f.data / "keypoints" / "cam02").string();
+  o.max_frames = 2;
+  auto capture_to = [&](const std::string& name, const std::string& weights) {
+    CaptureOptions c = o;
+    c.weights = weights;
+    c.out = (root / name).string();
+    capture_sequence(c);
+    return weft::capture::testing::slurp(root / name / "pose.motion");
+  };
+  const std::string folder = capture_to("folder", "");
+  EXPECT_EQ(capture_to("same", (f.model / "model.safetensors").string()), folder);
+  // Other weights: PoseNet's output bias moved.
+  const ModelFolder m = read_model_folder(f.model.string());
+  const Character character = load_character(m.character);
+  CaptureNetworks nets(character, m.network, m.seed);
+  load_capture_networks(m.weights, nets);
+  weft::Tensor& bias = nets.pose_net->fc->bias;
+  for (int64_t k = 0; k < bias.numel(); ++k) bias.set({k}, 0.3);
+  const fs::path other = root / "other.safetensors";
+  weft::nn::save_weights(other.string(), nets);
+  EXPECT_NE(capture_to("other", other.string()), folder);
+  CaptureOptions missing = o;
+  missing.weights = (root / "no_such.safetensors").string();
+  missing.out = (root / "missing").string();
+  expect_error([&] { capture_sequence(missing); }, {"--weights", "no_such.safetensors"});
+}
+
 TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
   const Fixture& f = fixture();
   AdaptOptions o;
