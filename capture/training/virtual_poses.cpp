@@ -56,6 +56,14 @@ Eigen::Vector2d floor_centre(const std::vector<const Camera*>& cameras, double u
   return first_origin + 3.0 * unit * first_axis;
 }
 
+// Only the crop's geometry is drawn from the augmentation: colours and photos belong to images.
+AugmentationOptions crop_geometry_only(const AugmentationOptions& a) {
+  AugmentationOptions g;
+  g.shift = a.shift;
+  g.scale = a.scale;
+  return g;
+}
+
 }  // namespace
 
 VirtualPoses::VirtualPoses(const Character& character, const VirtualPoseConfig& config,
@@ -63,14 +71,9 @@ VirtualPoses::VirtualPoses(const Character& character, const VirtualPoseConfig& 
                            double margin, const AugmentationOptions& augmentation,
                            const std::function<void(int, int)>& progress)
     : character_(character), config_(config), supervision_(supervision), camera_frames_(std::move(camera_frames)),
-      input_size_(input_size), margin_(margin), augmentation_(augmentation) {
+      input_size_(input_size), margin_(margin), augmentation_(crop_geometry_only(augmentation)) {
   WEFT_CHECK(config_.enabled(), "virtual poses: no motions");
   WEFT_CHECK(!camera_frames_.empty(), "virtual poses: no frames to take cameras from");
-  // Only the crop's geometry is drawn from the augmentation: colours and photos belong to images.
-  AugmentationOptions geometric;
-  geometric.shift = augmentation.shift;
-  geometric.scale = augmentation.scale;
-  augmentation_ = geometric;
   config_.keypoints.metres_per_unit = character.metres_per_unit;
   validate_keypoint_noise(config_.keypoints, "virtual_poses.keypoints");
 

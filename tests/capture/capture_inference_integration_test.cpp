@@ -66,16 +66,23 @@ const Fixture& fixture() {
   return *f;
 }
 
+// The fixture's model capturing one view of the tiny dataset, with its keypoints (or,
+// with keypoints = false, translated from the silhouette); the output folder is the test's.
+CaptureOptions view_capture(const Fixture& f, const std::string& view, bool keypoints = true) {
+  CaptureOptions o;
+  o.model = f.model.string();
+  o.input = (f.data / "images" / view).string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = view;
+  if (keypoints) o.keypoints = (f.data / "keypoints" / view).string();
+  return o;
+}
+
 }  // namespace
 
 TEST(Infer, WritesEveryFileAndThePoseFilesPutTheSkeletonWhereTheMeshesAre) {
   const Fixture& f = fixture();
-  CaptureOptions o;
-  o.model = f.model.string();
-  o.input = (f.data / "images" / "cam02").string();
-  o.camera = (f.data / "cameras.yaml").string();
-  o.camera_name = "cam02";
-  o.keypoints = (f.data / "keypoints" / "cam02").string();
+  CaptureOptions o = view_capture(f, "cam02");
   o.out = (infer_scratch_root() / "capture").string();
   int networks_calls = 0, mesh_calls = 0;
   const CaptureSummary s = capture_sequence(o, [&](const std::string& pass, int, int total) {
@@ -164,11 +171,7 @@ TEST(Infer, BadInputsNameTheFileAndLeaveNoCapture) {
   const Fixture& f = fixture();
   const fs::path root = infer_scratch_root() / "bad";
   fs::create_directories(root);
-  CaptureOptions o;
-  o.model = f.model.string();
-  o.input = (f.data / "images" / "cam02").string();
-  o.camera = (f.data / "cameras.yaml").string();
-  o.camera_name = "cam02";
+  CaptureOptions o = view_capture(f, "cam02", false);
   o.out = (root / "out").string();
 
   // A video OpenCV cannot open.
@@ -208,12 +211,7 @@ TEST(Infer, WeightsReplaceTheFoldersAndAMissingFileIsNamed) {
   const Fixture& f = fixture();
   const fs::path root = infer_scratch_root() / "weights";
   fs::create_directories(root);
-  CaptureOptions o;
-  o.model = f.model.string();
-  o.input = (f.data / "images" / "cam02").string();
-  o.camera = (f.data / "cameras.yaml").string();
-  o.camera_name = "cam02";
-  o.keypoints = (f.data / "keypoints" / "cam02").string();
+  CaptureOptions o = view_capture(f, "cam02");
   o.max_frames = 2;
   auto capture_to = [&](const std::string& name, const std::string& weights) {
     CaptureOptions c = o;
@@ -294,12 +292,7 @@ TEST(ModelFolder, CarriesTheSimulationOfItsDataset) {
 
 TEST(Infer, ResolvesCollisionsWhenAsked) {
   const Fixture& f = fixture();
-  CaptureOptions o;
-  o.model = f.model.string();
-  o.input = (f.data / "images" / "cam04").string();
-  o.camera = (f.data / "cameras.yaml").string();
-  o.camera_name = "cam04";
-  o.keypoints = (f.data / "keypoints" / "cam04").string();
+  CaptureOptions o = view_capture(f, "cam04");
   o.resolve_collisions = true;
   o.out = (infer_scratch_root() / "resolved").string();
   const CaptureSummary s = capture_sequence(o);
