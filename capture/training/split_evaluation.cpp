@@ -20,6 +20,7 @@
 #include "capture/model/model_folder.h"
 #include "capture/render/silhouette_iou.h"
 #include "capture/training/multiview_losses.h"
+#include "capture/training/pose_noise.h"
 #include "capture/training/training_config.h"
 #include "graph/autograd.h"
 #include "graph/error.h"
@@ -35,6 +36,19 @@ namespace {
 
 // Mean distance (character units) between corresponding rows.
 double mean_distance(const Vertices& a, const Vertices& b) { return (a - b).rowwise().norm().mean(); }
+
+// PoseNet's error per regressed dof, pooled over predictions, and the products of each
+// prediction's error with its predecessor's in the same view (lag-1 autocorrelation,
+// uncentred, pooled over dofs: Σ e(f)·e(f−1) / Σ (e(f)² + e(f−1)²)/2).
+struct DofErrorPool {
+  explicit DofErrorPool(size_t n_dofs) : sum(Eigen::VectorXd::Zero(n_dofs)), sq(Eigen::VectorXd::Zero(n_dofs)) {}
+  Eigen::VectorXd sum, sq;
+  double n = 0, pair_product = 0, pair_norm = 0;
+  void add(const Eigen::VectorXd& e, const Eigen::VectorXd* previous) {
+    sum += e, sq += e.cwiseAbs2(), n += 1;
+    if (previous) pair_product += e.dot(*previous), pair_norm += 0.5 * (e.squaredNorm() + previous->squaredNorm());
+  }
+};
 
 nlohmann::json distribution_json(const Distribution& d) {
   return {{"mean", d.mean}, {"p95", d.p95}, {"p99", d.p99}, {"max", d.max}, {"count", d.count}};
@@ -79,6 +93,11 @@ std::string SplitEvaluation::to_json() const {
                            {"elastic", elastic_mean_n},
                            {"collision", collision_mean_n},
                            {"friction", friction_mean_n}};
+  nlohmann::ordered_json dofs = nlohmann::ordered_json::object();
+  for (const DofError& d : dof_errors) dofs[d.name] = {{"rms", d.rms}, {"mean", d.mean}};
+  j["dof_errors"] = dofs;
+  j["dof_error_lag1"] = dof_error_lag1;
+  j["dof_error_correlation_frames"] = dof_error_correlation_frames;
   j["seconds"] = seconds;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   for (const SplitFrameEvaluation& f : per_frame) {
@@ -113,6 +132,8 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
 
   const fs::path gt_dir = fs::path(data) / "gt";
   const Motion motion = read_motion((gt_dir / "pose.motion").string(), int(ch.rest_dofs.size()));
+  const Motion oracle = cfg.oracle_pose_noise.enabled() ? perturbed_motion(motion, ch.skeleton, cfg.oracle_pose_noise)
+                                                        : motion;
   // The mean training pose (regressed dofs averaged, the root chain at rest).
   Eigen::VectorXd mean_dofs = ch.rest_dofs;
   if (info.splits.count("train") && !info.splits.at("train").empty()) {
@@ -180,11 +201,13 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   FrameMetricMeans means;
   MeasuredMean kp, iou, tmpl_iou;
   BalancePool balance;
+  DofErrorPool dof_err(param.free_dofs.size());
   FrameMeasures penetration;  // sums over predictions (depth, vertices inside), and the max
   penetration.penetration_max_mm = 0;
   for (int v = 0; v < V; ++v) {
     std::map<int, Vertices> cloth_seq, body_seq;
     std::map<int, size_t> row_of;  // frame → its row of e.per_frame for this view
+    std::map<int, Eigen::VectorXd> view_err;  // frame → PoseNet's error per free dof, this view
     for (size_t first = 0; first < frames.size(); first += 8) {
       std::vector<Sample> samples(std::min<size_t>(8, frames.size() - first));
       tbb::parallel_for(size_t(0), samples.size(),
@@ -199,8 +222,8 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
       if (cfg.oracle_pose) {
         std::vector<double> d;
         for (int f : batch.frames)
-          for (int64_t k = 0; k < motion.dofs.cols(); ++k) d.push_back(motion.dofs(f, k));
-        const Tensor dofs = Tensor::from_data({int64_t(batch.frames.size()), motion.dofs.cols()}, d, DType::F32);
+          for (int64_t k = 0; k < oracle.dofs.cols(); ++k) d.push_back(oracle.dofs(f, k));
+        const Tensor dofs = Tensor::from_data({int64_t(batch.frames.size()), oracle.dofs.cols()}, d, DType::F32);
         p = model.predict_posed(dofs, deformation);
         t = model.predict_posed(dofs, Tensor());
       } else {
@@ -238,6 +261,15 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
             for (int c = 0; c < 3; ++c) R_pred(r, c) = p.rotation.data<float>()[9 * b + 3 * r + c];
           predicted.root_rotation = R_pred;
           truth.root_rotation = gt_rotation[f];
+        }
+        if (!cfg.oracle_pose) {
+          Eigen::VectorXd err(param.free_dofs.size());
+          for (size_t i = 0; i < param.free_dofs.size(); ++i) {
+            const int d = param.free_dofs[i];
+            err[i] = p.dofs.data<float>()[b * p.dofs.size(1) + d] - motion.dofs(f, d);
+          }
+          dof_err.add(err, view_err.count(f - 1) && same_segment(info, f - 1, f) ? &view_err[f - 1] : nullptr);
+          view_err[f] = err;
         }
         FrameMeasures& fm = fe.measures;
         measure_geometry(ch, predicted, truth, true, fm);
@@ -316,6 +348,17 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.elastic_mean_n = balance.elastic.value();
   e.collision_mean_n = balance.collision.value();
   e.friction_mean_n = balance.friction.value();
+  if (dof_err.n > 0) {
+    for (size_t i = 0; i < param.free_dofs.size(); ++i)
+      e.dof_errors.push_back({ch.skeleton.dofs[param.free_dofs[i]].name, std::sqrt(dof_err.sq[i] / dof_err.n),
+                              dof_err.sum[i] / dof_err.n});
+    if (dof_err.pair_norm > 0) {
+      e.dof_error_lag1 = dof_err.pair_product / dof_err.pair_norm;
+      e.dof_error_correlation_frames = e.dof_error_lag1 > 0 && e.dof_error_lag1 < 1 ? -1.0 / std::log(e.dof_error_lag1)
+                                       : e.dof_error_lag1 >= 1                      ? kNotMeasured
+                                                                                    : 0.0;
+    }
+  }
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;
 }

@@ -161,6 +161,13 @@ class Trainer {
                    " frames, but the dataset uses frame ", f, " (oracle_pose)");
       spdlog::info("oracle pose: the warm start, the physics stage and validation pose the character by {}",
                    gt.string());
+      oracle_motion_ = gt_motion_;
+      if (cfg_.oracle_pose_noise.enabled()) {
+        const PoseNoiseConfig& n = cfg_.oracle_pose_noise;
+        oracle_motion_ = perturbed_motion(gt_motion_, character_.skeleton, n);
+        spdlog::info("oracle pose perturbed as PoseNet errs: {} dofs from {}, scale {}, correlation {} frames, seed {}",
+                     n.spread.size(), n.file, n.scale, n.correlation_frames, n.seed);
+      }
     }
     spdlog::info("data: {} ({} train frames, {} val, {} views, {}×{}); character {}: {} body + {} cloth vertices, "
                  "{} + {} graph nodes, {} regressed dofs",
@@ -304,13 +311,14 @@ class Trainer {
   };
   std::map<int, RootPose> gt_roots_;  // the truth's, per frame of gt/pose.motion
   Motion gt_motion_;  // gt/pose.motion (empty without one)
-  // The ground truth's dofs of the batch's frames [B, D] (config oracle_pose).
+  Motion oracle_motion_;  // config oracle_pose: gt_motion_, perturbed by oracle_pose_noise when given
+  // The oracle's dofs of the batch's frames [B, D] (config oracle_pose).
   Tensor oracle_dofs(const Batch& batch) const {
-    const int64_t D = gt_motion_.dofs.cols();
+    const int64_t D = oracle_motion_.dofs.cols();
     std::vector<double> d;
     d.reserve(batch.frames.size() * D);
     for (int f : batch.frames)
-      for (int64_t k = 0; k < D; ++k) d.push_back(gt_motion_.dofs(f, k));
+      for (int64_t k = 0; k < D; ++k) d.push_back(oracle_motion_.dofs(f, k));
     return Tensor::from_data({int64_t(batch.frames.size()), D}, d, DType::F32);
   }
   physics::SimulatorFactory simulator_;

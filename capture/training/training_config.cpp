@@ -94,7 +94,8 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
                           "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
-                          "shards", "oracle_pose", "physics", "augmentation", "lumbar_share", "virtual_poses"});
+                          "shards", "oracle_pose", "oracle_pose_noise", "physics", "augmentation", "lumbar_share",
+                          "virtual_poses"});
   TrainingConfig c;
   c.file = name;
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
@@ -107,10 +108,15 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
              {"checkpoint_every", &c.checkpoint_every, 1, 1e8},
              {"keep_checkpoints", &c.keep_checkpoints, 1, 1000},
              {"shards", &c.shards, 0, 4096}},
-            {"seed", "network", "stages", "oracle_pose", "physics", "augmentation", "virtual_poses"});
+            {"seed", "network", "stages", "oracle_pose", "oracle_pose_noise", "physics", "augmentation", "virtual_poses"});
   if (root["virtual_poses"]) c.virtual_poses = parse_virtual_pose_config(y, root["virtual_poses"]);
   if (root["augmentation"]) c.augmentation = parse_augmentation(y, root["augmentation"], "augmentation");
   if (root["oracle_pose"]) c.oracle_pose = y.get<bool>(root["oracle_pose"], "oracle_pose", "true or false");
+  if (const YAML::Node n = root["oracle_pose_noise"]) {
+    if (!c.oracle_pose)
+      y.fail_at(n, "oracle_pose_noise", "perturbs the oracle pose, but oracle_pose is not true");
+    c.oracle_pose_noise = parse_pose_noise(y, n, "oracle_pose_noise");
+  }
   if (root["network"]) parse_network_config(y, root["network"], c.network);
   for (StageKind kind : {StageKind::pose, StageKind::warmup, StageKind::physics}) {
     StageConfig s;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "capture/dataset/augmentation.h"
+#include "capture/training/pose_noise.h"
 #include "capture/training/virtual_poses.h"
 #include "capture/model/model_folder.h"
 #include "capture/model/network_config.h"
@@ -96,6 +97,10 @@ struct TrainingConfig {
   // isolates what the deformation stages do to the garment from pose error (the paper
   // assumes PoseNet fixed in its section 3.3.2). The pose stage is then not needed.
   bool oracle_pose = false;
+  // The oracle pose perturbed as PoseNet errs (capture/training/pose_noise.h): the same
+  // perturbed poses in training and evaluation; the joint errors are still measured
+  // against the truth. Off without an oracle_pose_noise key; needs oracle_pose.
+  PoseNoiseConfig oracle_pose_noise;
   // The lumbar spine's share of the trunk's lean (MidHip → Neck turned from rest) that the
   // lumbopelvic prior (stages.<stage>.lumbopelvic) leaves to it; the pelvis takes the rest.
   // Forward bending: about 0.7 early, 0.57 late (Tafazzol et al. 2014); CMU 01_03: 0.6.

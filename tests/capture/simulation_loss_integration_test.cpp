@@ -14,6 +14,7 @@
 #include "capture/garment/garment_windows.h"
 #include "geometry/mesh_io.h"
 #include "capture/training/silhouette_rays.h"
+#include "capture/training/pose_noise.h"
 #include "capture/training/simulation_loss.h"
 #include "tests/capture/coarse_skirt.h"
 #include "tests/capture/shared_fixture.h"
@@ -104,6 +105,47 @@ TEST(SimulationLoss, TargetOfAClothInsideTheBodyLiesOutsideIt) {
       moved_out += (targets[0].row(i) - cloth.row(i)).norm() * mpu;
     EXPECT_GT(moved_out, 0.0);
   }
+}
+
+// The physics claim's quick check (bench/physics_claim.sh, oracle_pose_noise): the oracle
+// pose perturbed as PoseNet errs moves the body into the garment the true pose dressed;
+// the window's target lies outside the perturbed body, so L_sim has penetration to remove.
+TEST(SimulationLoss, TargetUnderAPerturbedPoseLiesOutsideThePerturbedBody) {
+  REQUIRE_HUMAN();
+  const Character& ch = coarse_skirt();
+  const double mpu = ch.metres_per_unit;
+  Motion truth;
+  truth.dofs = ch.rest_dofs.transpose().replicate(2, 1);  // the true pose: at rest, where the skirt is drawn
+  truth.frame_ids = {0, 1};
+  PoseNoiseConfig noise;
+  noise.file = "test";
+  noise.correlation_frames = 1e6;  // one error for both frames
+  for (const Dof& d : ch.skeleton.dofs)
+    if (d.limited && d.upper > d.lower) noise.spread.emplace_back(d.name, 0.25);
+  ASSERT_FALSE(noise.spread.empty());
+  // The first seed whose perturbed body holds at least 10 of the (loose) skirt's vertices, one deeper than 1 cm.
+  Vertices body;
+  Penetration before;
+  for (noise.seed = 1; noise.seed <= 40; ++noise.seed) {
+    const Motion perturbed = perturbed_motion(truth, ch.skeleton, noise);
+    body = pose_character(ch, perturbed.dofs.row(0).transpose()).body;
+    before = body_penetration(body_obstacle(ch, body * mpu), to_positions(ch.cloth->mesh.V, mpu));
+    if (before.vertices_inside >= 10 && before.max_depth > 0.01) break;
+  }
+  ASSERT_LE(noise.seed, 40u) << "no seed's perturbed pose puts the skirt inside the body";
+  PredictedWindow w;
+  for (int j = 0; j < 2; ++j) {
+    w.cloth.push_back(ch.cloth->mesh.V);
+    w.body.push_back(body);
+  }
+  SimulationWindowRecord rec;
+  const auto window = simulation_loss_window(ch, training_simulation(), w, true, rec);
+  EXPECT_EQ(rec.start_inside, before.vertices_inside);
+  const std::vector<Vertices> targets = simulation_loss_targets(run(ch, window), mpu, rec);
+  ASSERT_EQ(targets.size(), 1u) << rec.status;
+  const Penetration target = body_penetration(body_obstacle(ch, body * mpu), to_positions(targets[0], mpu));
+  EXPECT_LE(target.max_depth, 1e-3) << target.vertices_inside << " of " << before.vertices_inside
+                                     << " vertices still inside (seed " << noise.seed << ")";
 }
 
 TEST(SimulationLoss, StartWithAThirdOfTheSkirtInsideConvergesAfterTheCleanUp) {
