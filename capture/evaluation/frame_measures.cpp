@@ -45,7 +45,7 @@ double mean_joint_error_mm(const Vertices& p, const Vertices& g, double mpu) {
 
 Penetration cloth_penetration(const Character& ch, const Vertices& body, const Vertices& cloth) {
   return body_penetration(body_obstacle(ch, Eigen::MatrixX3d(body * ch.metres_per_unit)),
-                          to_positions(cloth, ch.metres_per_unit));
+                          to_positions(cloth, ch.metres_per_unit), kContactDistanceM);
 }
 
 std::vector<double> cloth_signed_distances_mm(const Character& ch, const Vertices& body, const Vertices& cloth) {
@@ -232,6 +232,8 @@ const std::vector<FrameMetric>& frame_metrics() {
        &M::penetration_mean_all_mm},
       {"penetration_max_mm", "mm", "the deepest free cloth vertex", &M::penetration_max_mm},
       {"penetrating_fraction", "", "the fraction of free cloth vertices inside the body", &M::penetrating_fraction},
+      {"contact_fraction", "", "the fraction of free cloth vertices outside the body but within 4 mm of it (contact)",
+       &M::contact_fraction},
       {"oob_force_mean_n", "N", "out-of-balance force, mean over the free vertices", &M::oob_force_mean_n},
       {"oob_force_p95_n", "N", "its 95th percentile", &M::oob_force_p95_n},
       {"oob_force_p99_n", "N", "its 99th percentile", &M::oob_force_p99_n},
@@ -303,6 +305,7 @@ void measure_penetration(const Character& ch, const Vertices& body, const Vertic
   m.penetration_mean_all_mm = cloth.rows() ? p.depth_sum * 1e3 / double(cloth.rows()) : kNotMeasured;
   m.penetration_max_mm = p.max_depth * 1e3;
   m.penetrating_fraction = cloth.rows() ? double(p.vertices_inside) / double(cloth.rows()) : kNotMeasured;
+  m.contact_fraction = cloth.rows() ? double(p.vertices_in_contact) / double(cloth.rows()) : kNotMeasured;
 }
 
 void measure_geometry(const Character& ch, const PosedFrame& p, const PosedFrame& t, bool cloth_error,

@@ -38,6 +38,9 @@ namespace weft::capture {
 
 // "Not measured", in every evaluation: NaN in memory, null in JSON.
 inline constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
+// A free cloth vertex outside the body but closer than this counts as in contact (m): the
+// simulator's default collision thickness (garment_config.h).
+inline constexpr double kContactDistanceM = 0.004;
 
 // ‖a_i − b_i‖ per row, in mm (rows of a and b correspond; character units × metres_per_unit).
 std::vector<double> vertex_distances_mm(const Vertices& a, const Vertices& b, double metres_per_unit);
@@ -185,6 +188,7 @@ struct FrameMeasures {
   double penetration_mean_mm = kNotMeasured;      // over the cloth vertices inside (0 when none is)
   double penetration_mean_all_mm = kNotMeasured;  // over every cloth vertex (0 outside)
   double penetration_max_mm = kNotMeasured, penetrating_fraction = kNotMeasured;
+  double contact_fraction = kNotMeasured;  // free cloth vertices outside but within kContactDistanceM of the body
   // Out-of-balance force over the vertices the attachment does not hold (free), and over all.
   double oob_force_mean_n = kNotMeasured, oob_force_p95_n = kNotMeasured, oob_force_p99_n = kNotMeasured,
          oob_force_max_n = kNotMeasured;

@@ -84,7 +84,7 @@ physics::SimulationWindow garment_window(const GarmentSequence& s, int start, in
   return w;
 }
 
-Penetration body_penetration(const physics::BodyMesh& body, const physics::Positions& x) {
+Penetration body_penetration(const physics::BodyMesh& body, const physics::Positions& x, double contact_distance) {
   Penetration p;
   for (int i = 0; i < x.size() / 3; ++i) {
     const physics::ClosestPoint c = body.closest_point(x.segment<3>(3 * i));
@@ -92,6 +92,8 @@ Penetration body_penetration(const physics::BodyMesh& body, const physics::Posit
       p.max_depth = std::max(p.max_depth, -c.distance);
       p.depth_sum -= c.distance;
       ++p.vertices_inside;
+    } else if (c.face >= 0 && c.distance < contact_distance) {
+      ++p.vertices_in_contact;
     }
   }
   return p;

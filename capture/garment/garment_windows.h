@@ -48,8 +48,10 @@ struct Penetration {
   double max_depth = 0;
   double depth_sum = 0;  // m, over the vertices inside
   int vertices_inside = 0;
+  int vertices_in_contact = 0;  // outside, closer to the body than contact_distance
 };
-Penetration body_penetration(const physics::BodyMesh& body, const physics::Positions& x);
+// contact_distance (m): how close to the surface an outside vertex counts as in contact.
+Penetration body_penetration(const physics::BodyMesh& body, const physics::Positions& x, double contact_distance = 0);
 // The body of `frame` as the simulator sees it (inactive faces left out).
 physics::BodyMesh collision_body(const GarmentSequence& sequence, int frame);
 

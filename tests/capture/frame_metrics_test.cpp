@@ -71,9 +71,9 @@ std::vector<double> vertex_weights() {
   return w;
 }
 
-// The prediction: the sheet's centre vertex (12) moved 5 mm inside the sphere, the rest
-// 0.1 m or more outside.
-FrameMeasures one_vertex_inside() {
+// The prediction: the sheet's centre vertex (12) moved `depth_m` inside the sphere
+// (negative: outside), the rest 0.1 m or more outside.
+FrameMeasures one_vertex_at(double depth_m) {
   const PosedFrame t = truth_of(far_apart());
   PosedFrame p = t;
   // The sphere's face nearest the direction (0, 0, 1): its centroid, pushed 5 mm inward.
@@ -83,11 +83,12 @@ FrameMeasures one_vertex_inside() {
   for (int f = 1; f < s.num_faces(); ++f)
     if (normals(f, 2) > normals(face, 2)) face = f;
   const Eigen::Vector3d c = (s.V.row(s.F(face, 0)) + s.V.row(s.F(face, 1)) + s.V.row(s.F(face, 2))).transpose() / 3;
-  p.cloth.row(12) = (c - 0.005 * normals.row(face).transpose()).transpose();
+  p.cloth.row(12) = (c - depth_m * normals.row(face).transpose()).transpose();
   FrameMeasures m;
   measure_geometry(far_apart(), p, t, true, m);
   return m;
 }
+FrameMeasures one_vertex_inside() { return one_vertex_at(0.005); }
 
 // The sheet's centre vertex 1 cm inside a ball of 2 cm; the other vertices 3 cm or more
 // outside it.
@@ -307,6 +308,13 @@ std::vector<MetricCase> metric_cases() {
                  EXPECT_EQ(a.penetrating_vertices, 0);
                  EXPECT_EQ(a.cloth_vertices, 24);
                  EXPECT_EQ(a.penetration_mean_all_mm, 0.0);
+               }});
+  c.push_back({"contact_fraction", "one of 25 vertices 2 mm outside: in contact; 6 mm outside or inside: not", [] {
+                 const FrameMeasures near = one_vertex_at(-0.002);
+                 EXPECT_DOUBLE_EQ(near.contact_fraction, 1.0 / 25);
+                 EXPECT_EQ(near.penetrating_fraction, 0.0);
+                 EXPECT_EQ(one_vertex_at(-0.006).contact_fraction, 0.0);
+                 EXPECT_EQ(one_vertex_inside().contact_fraction, 0.0);
                }});
   // Held still in the air, out of contact, nothing pinned: every vertex is out of balance
   // by its weight. Dropped from rest (x = x0 + g t²/2): in balance, inertia = weight.
