@@ -12,13 +12,20 @@
 #      physics               L_sil + L_lm + L_att + L_sim + ARAP (body and garment)
 #      arap_only             the same with the simulation weight 0
 #      physics_no_cloth_arap L_sim with the body's ARAP only
-# 4. Every arm evaluated on the test split under the oracle pose (weft train --evaluate
-#    test), and bench/physics_claim.py: per metric the arm / ARAP-only ratio of means over
-#    the paired predictions (IoU: difference in points) with a 95 % bootstrap interval over
-#    test frames, and each seed's ratio, in OUT/physics_claim.json.
-# --quick: 3 seeds, short stages (about 15 minutes on 2 cores); without it 3 seeds and
-# stages 4x longer. Reuses OUT/data and OUT/warmup when present, and skips an arm whose
-# evaluation exists. --reevaluate: trains nothing; evaluates the warm start and every arm of
+# 4. The same under the oracle pose perturbed as PoseNet errs (training config key
+#    oracle_pose_noise, configs/noise/posenet_dof_error.yaml: the default run's PoseNet's
+#    error per dof on its validation split), so the garment the silhouettes ask for meets a
+#    body in the wrong place, as under a predicted pose: its own warm start, then
+#      pose_noise_physics    the physics arm's losses
+#      pose_noise_arap_only  the same with the simulation weight 0
+# 5. Every arm evaluated on the test split under its pose (weft train --evaluate test), and
+#    bench/physics_claim.py: per metric the arm / ARAP-only ratio of means over the paired
+#    predictions (IoU: difference in points) with a 95 % bootstrap interval over test
+#    frames, and each seed's ratio, in OUT/physics_claim.json. Its top-level entries are
+#    pose_noise_physics / pose_noise_arap_only; the oracle's under "oracle" and "arms".
+# --quick: 3 seeds, short stages (about 20 minutes on 2 cores); without it 3 seeds and
+# stages 4x longer. Reuses OUT/data and the warm starts when present, and skips an arm whose
+# evaluation exists. --reevaluate: trains nothing; evaluates the warm starts and every arm of
 # OUT again with this build's evaluator (after a change to a metric), then the statistics
 # (whose wall time is then the re-evaluation's).
 # Needs a build (scripts/build.sh).
@@ -30,7 +37,7 @@ for a in "$@"; do
   case "$a" in
     --quick) quick=1 ;;
     --reevaluate) reevaluate=1 ;;
-    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,31p' "$0"; exit 0 ;;
     -*) echo "physics_claim: unknown option $a (expected --quick or --reevaluate)" >&2; exit 2 ;;
     *) out=$a ;;
   esac
@@ -55,11 +62,18 @@ evaluate() {
   "$weft" train --config "$out/configs/$1.yaml" --data "$out/data" --out "$2" --evaluate test >>"$2.log" 2>&1
 }
 
+noise_file="$root/configs/noise/posenet_dof_error.yaml"
+oracle_arms=(physics arap_only physics_no_cloth_arap)
+noise_arms=(pose_noise_physics pose_noise_arap_only)
+
 if ((reevaluate)); then
-  log "re-evaluating the warm start"
-  evaluate warmup "$out/warmup"
+  for warm in warmup warmup_pose_noise; do
+    [ -f "$out/$warm/model.safetensors" ] || continue
+    log "re-evaluating the warm start $warm"
+    evaluate "$warm" "$out/$warm"
+  done
   for seed in "${seeds[@]}"; do
-    for arm in physics arap_only physics_no_cloth_arap; do
+    for arm in "${oracle_arms[@]}" "${noise_arms[@]}"; do
       run="$out/arms/$arm-$seed"
       [ -f "$run/model.safetensors" ] || { echo "physics_claim: $run has no model.safetensors: run without --reevaluate" >&2; exit 2; }
       log "re-evaluating $arm, seed $seed"
@@ -73,12 +87,16 @@ if [ ! -f "$out/data/dataset.yaml" ]; then
   "$weft" synth --config "$root/configs/synth/physics_claim.yaml" --out "$out/data" >"$out/synth.log" 2>&1
 fi
 
-# config NAME SEED STAGES: a training config under the oracle pose.
+# config NAME SEED STAGES: a training config under the oracle pose (perturbed when NAME
+# starts with pose_noise or is warmup_pose_noise).
 config() {
+  local noise=""
+  case $1 in pose_noise*|warmup_pose_noise) noise="oracle_pose_noise: $noise_file" ;; esac
   cat >"$out/configs/$1.yaml" <<EOF
 # Written by bench/physics_claim.sh.
 seed: $2
 oracle_pose: true
+$noise
 network: {backbone: resnet18, input_size: 64}
 stages:
 $3
@@ -93,29 +111,31 @@ keep_checkpoints: 1
 EOF
 }
 
-if [ ! -f "$out/warmup/model.safetensors" ]; then
-  config warmup 0 "  warmup: {steps: $warm_steps, batch_size: 8, lr: 1.0e-3, final_lr_fraction: 0.1, landmarks: 1, silhouette: 1, arap: 10, attachment: 10}"
-  log "warm start: $warm_steps steps"
-  rm -rf "$out/warmup"
-  "$weft" train --config "$out/configs/warmup.yaml" --data "$out/data" --out "$out/warmup" >"$out/warmup.log" 2>&1
-  evaluate warmup "$out/warmup"
-fi
+for warm in warmup warmup_pose_noise; do
+  [ -f "$out/$warm/model.safetensors" ] && continue
+  config "$warm" 0 "  warmup: {steps: $warm_steps, batch_size: 8, lr: 1.0e-3, final_lr_fraction: 0.1, landmarks: 1, silhouette: 1, arap: 10, attachment: 10}"
+  log "warm start $warm: $warm_steps steps"
+  rm -rf "$out/$warm"
+  "$weft" train --config "$out/configs/$warm.yaml" --data "$out/data" --out "$out/$warm" >"$out/$warm.log" 2>&1
+  evaluate "$warm" "$out/$warm"
+done
 
 stage="batch_size: 8, lr: 2.0e-4, final_lr_fraction: 1, landmarks: 1, silhouette: 1, attachment: 10"
 for seed in "${seeds[@]}"; do
-  for arm in physics arap_only physics_no_cloth_arap; do
+  for arm in "${oracle_arms[@]}" "${noise_arms[@]}"; do
     case $arm in
-      physics) weights="simulation: 1, arap: 10" ;;
-      arap_only) weights="simulation: 0, arap: 10" ;;
+      physics|pose_noise_physics) weights="simulation: 1, arap: 10" ;;
+      arap_only|pose_noise_arap_only) weights="simulation: 0, arap: 10" ;;
       physics_no_cloth_arap) weights="simulation: 1, arap: 10, cloth_arap: 0" ;;
     esac
+    case $arm in pose_noise*) warm=warmup_pose_noise ;; *) warm=warmup ;; esac
     run="$out/arms/$arm-$seed"
     [ -f "$run/evaluation_test.json" ] && continue
     config "$arm-$seed" "$seed" "  physics: {steps: $physics_steps, $stage, $weights}"
-    log "$arm, seed $seed: $physics_steps physics steps from the warm start"
+    log "$arm, seed $seed: $physics_steps physics steps from $warm"
     rm -rf "$run"
     "$weft" train --config "$out/configs/$arm-$seed.yaml" --data "$out/data" --out "$run" \
-      --init "$out/warmup/model.safetensors" >"$run.log" 2>&1
+      --init "$out/$warm/model.safetensors" >"$run.log" 2>&1
     evaluate "$arm-$seed" "$run"
   done
 done
@@ -124,4 +144,4 @@ log "statistics"
 quick_flag=()
 ((quick)) && quick_flag=(--quick)
 python3 "$root/bench/physics_claim.py" "$out" --seeds "$(IFS=,; echo "${seeds[*]}")" \
-  --wall-seconds "$(($(date +%s) - start))" "${quick_flag[@]}"
+  --noise-arms pose_noise_physics --wall-seconds "$(($(date +%s) - start))" "${quick_flag[@]}"
