@@ -2,6 +2,8 @@
 # The experiment behind the paper's physics claim, with the pose taken out of it:
 #
 #   bench/physics_claim.sh [--quick] [--reevaluate] OUT
+#   bench/physics_claim.sh --pipeline OUT      (the full pipeline on unseen motion:
+#                                               bench/physics_claim_pipeline.sh)
 #
 # 1. A dataset with 3D ground truth (configs/synth/physics_claim.yaml: 72 frames, the
 #    coarse skirt, 4 views; the test split is the motion's last 18 frames).
@@ -30,6 +32,10 @@
 # (whose wall time is then the re-evaluation's).
 # Needs a build (scripts/build.sh).
 set -euo pipefail
+if [ "${1:-}" = --pipeline ]; then
+  shift
+  exec "$(dirname "$0")/physics_claim_pipeline.sh" "$@"
+fi
 quick=0
 reevaluate=0
 out=""
@@ -37,8 +43,9 @@ for a in "$@"; do
   case "$a" in
     --quick) quick=1 ;;
     --reevaluate) reevaluate=1 ;;
-    -h|--help) sed -n '2,31p' "$0"; exit 0 ;;
-    -*) echo "physics_claim: unknown option $a (expected --quick or --reevaluate)" >&2; exit 2 ;;
+    --pipeline) echo "physics_claim: --pipeline comes first: bench/physics_claim.sh --pipeline OUT" >&2; exit 2 ;;
+    -h|--help) sed -n '2,33p' "$0"; exit 0 ;;
+    -*) echo "physics_claim: unknown option $a (expected --quick, --reevaluate or --pipeline)" >&2; exit 2 ;;
     *) out=$a ;;
   esac
 done

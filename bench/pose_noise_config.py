@@ -3,10 +3,11 @@
 
     bench/pose_noise_config.py RUN/evaluation_val.json --source "what was measured" > configs/noise/NAME.yaml
 
-Reads `weft train --evaluate` output (dof_errors: each regressed dof's RMS error;
-dof_error_correlation_frames: the error's correlation time) and writes the mapping
-oracle_pose_noise reads: seed 1, scale 1, correlation_frames, spread (dof: RMS). Dofs
-whose RMS is null are left out. Standard library only.
+Reads `weft train --evaluate` output (dof_errors: each regressed dof's mean error and its
+spread about the mean; dof_error_correlation_frames: the correlation time of the error
+about its mean) and writes the mapping oracle_pose_noise reads: seed 1, scale 1,
+correlation_frames, spread (dof: std), bias (dof: mean). Dofs not measured are left out.
+Standard library only.
 """
 import argparse
 import json
@@ -32,14 +33,19 @@ def main():
     print(f"# {a.source}")
     print(f"# Written by bench/pose_noise_config.py from {a.evaluation}: split '{e.get('split')}', "
           f"{e.get('predictions')} predictions; root-relative joint error "
-          f"{e.get('joint_error_root_relative_mm'):.1f} mm; lag-1 autocorrelation {e.get('dof_error_lag1'):.3f}.")
+          f"{e.get('joint_error_root_relative_mm'):.1f} mm;")
+    print(f"# lag-1 autocorrelation of the error about its mean {e.get('dof_error_lag1'):.3f}.")
     print("seed: 1")
     print("scale: 1.0")
     print(f"correlation_frames: {tau:.3g}")
-    print("spread:   # RMS of predicted - true (radians)")
+    print("spread:   # standard deviation of predicted - true about its mean (radians)")
     for name, d in dofs.items():
-        if d.get("rms") is not None:
-            print(f"  {name}: {d['rms']:.4g}")
+        if d.get("std") is not None:
+            print(f"  {name}: {d['std']:.4g}")
+    print("bias:     # mean of predicted - true (radians)")
+    for name, d in dofs.items():
+        if d.get("mean") is not None:
+            print(f"  {name}: {d['mean']:.4g}")
 
 
 if __name__ == "__main__":

@@ -37,16 +37,18 @@ namespace {
 // Mean distance (character units) between corresponding rows.
 double mean_distance(const Vertices& a, const Vertices& b) { return (a - b).rowwise().norm().mean(); }
 
-// PoseNet's error per regressed dof, pooled over predictions, and the products of each
-// prediction's error with its predecessor's in the same view (lag-1 autocorrelation,
-// uncentred, pooled over dofs: Σ e(f)·e(f−1) / Σ (e(f)² + e(f−1)²)/2).
+// PoseNet's error per regressed dof of every prediction, and which prediction precedes
+// which in the same view: the mean, the RMS and the spread about the mean per dof, and the
+// lag-1 autocorrelation of the error about its mean, pooled over dofs:
+// Σ c(f)·c(f−1) / Σ (c(f)² + c(f−1)²)/2, c = e − mean.
 struct DofErrorPool {
-  explicit DofErrorPool(size_t n_dofs) : sum(Eigen::VectorXd::Zero(n_dofs)), sq(Eigen::VectorXd::Zero(n_dofs)) {}
-  Eigen::VectorXd sum, sq;
-  double n = 0, pair_product = 0, pair_norm = 0;
-  void add(const Eigen::VectorXd& e, const Eigen::VectorXd* previous) {
-    sum += e, sq += e.cwiseAbs2(), n += 1;
-    if (previous) pair_product += e.dot(*previous), pair_norm += 0.5 * (e.squaredNorm() + previous->squaredNorm());
+  std::vector<Eigen::VectorXd> errors;
+  std::vector<std::pair<size_t, size_t>> pairs;  // (prediction, its predecessor)
+  // Adds a prediction's error; previous: its predecessor's index in the same view, or -1.
+  size_t add(const Eigen::VectorXd& e, long previous) {
+    errors.push_back(e);
+    if (previous >= 0) pairs.emplace_back(errors.size() - 1, size_t(previous));
+    return errors.size() - 1;
   }
 };
 
@@ -94,7 +96,7 @@ std::string SplitEvaluation::to_json() const {
                            {"collision", collision_mean_n},
                            {"friction", friction_mean_n}};
   nlohmann::ordered_json dofs = nlohmann::ordered_json::object();
-  for (const DofError& d : dof_errors) dofs[d.name] = {{"rms", d.rms}, {"mean", d.mean}};
+  for (const DofError& d : dof_errors) dofs[d.name] = {{"rms", d.rms}, {"mean", d.mean}, {"std", d.std}};
   j["dof_errors"] = dofs;
   j["dof_error_lag1"] = dof_error_lag1;
   j["dof_error_correlation_frames"] = dof_error_correlation_frames;
@@ -201,13 +203,13 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   FrameMetricMeans means;
   MeasuredMean kp, iou, tmpl_iou;
   BalancePool balance;
-  DofErrorPool dof_err(param.free_dofs.size());
+  DofErrorPool dof_err;
   FrameMeasures penetration;  // sums over predictions (depth, vertices inside), and the max
   penetration.penetration_max_mm = 0;
   for (int v = 0; v < V; ++v) {
     std::map<int, Vertices> cloth_seq, body_seq;
     std::map<int, size_t> row_of;  // frame → its row of e.per_frame for this view
-    std::map<int, Eigen::VectorXd> view_err;  // frame → PoseNet's error per free dof, this view
+    std::map<int, size_t> view_err;  // frame → its PoseNet error in dof_err, this view
     for (size_t first = 0; first < frames.size(); first += 8) {
       std::vector<Sample> samples(std::min<size_t>(8, frames.size() - first));
       tbb::parallel_for(size_t(0), samples.size(),
@@ -268,8 +270,7 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
             const int d = param.free_dofs[i];
             err[i] = p.dofs.data<float>()[b * p.dofs.size(1) + d] - motion.dofs(f, d);
           }
-          dof_err.add(err, view_err.count(f - 1) && same_segment(info, f - 1, f) ? &view_err[f - 1] : nullptr);
-          view_err[f] = err;
+          view_err[f] = dof_err.add(err, view_err.count(f - 1) && same_segment(info, f - 1, f) ? long(view_err[f - 1]) : -1);
         }
         FrameMeasures& fm = fe.measures;
         measure_geometry(ch, predicted, truth, true, fm);
@@ -348,12 +349,21 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.elastic_mean_n = balance.elastic.value();
   e.collision_mean_n = balance.collision.value();
   e.friction_mean_n = balance.friction.value();
-  if (dof_err.n > 0) {
+  if (!dof_err.errors.empty()) {
+    const double n = double(dof_err.errors.size());
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(param.free_dofs.size()), sq = sum;
+    for (const Eigen::VectorXd& x : dof_err.errors) sum += x, sq += x.cwiseAbs2();
+    const Eigen::VectorXd mean = sum / n;
     for (size_t i = 0; i < param.free_dofs.size(); ++i)
-      e.dof_errors.push_back({ch.skeleton.dofs[param.free_dofs[i]].name, std::sqrt(dof_err.sq[i] / dof_err.n),
-                              dof_err.sum[i] / dof_err.n});
-    if (dof_err.pair_norm > 0) {
-      e.dof_error_lag1 = dof_err.pair_product / dof_err.pair_norm;
+      e.dof_errors.push_back({ch.skeleton.dofs[param.free_dofs[i]].name, std::sqrt(sq[i] / n), mean[i],
+                              std::sqrt(std::max(0.0, sq[i] / n - mean[i] * mean[i]))});
+    double product = 0, norm = 0;
+    for (const auto& [a, b] : dof_err.pairs) {
+      const Eigen::VectorXd ca = dof_err.errors[a] - mean, cb = dof_err.errors[b] - mean;
+      product += ca.dot(cb), norm += 0.5 * (ca.squaredNorm() + cb.squaredNorm());
+    }
+    if (norm > 0) {
+      e.dof_error_lag1 = product / norm;
       e.dof_error_correlation_frames = e.dof_error_lag1 > 0 && e.dof_error_lag1 < 1 ? -1.0 / std::log(e.dof_error_lag1)
                                        : e.dof_error_lag1 >= 1                      ? kNotMeasured
                                                                                     : 0.0;

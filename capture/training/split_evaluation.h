@@ -25,10 +25,11 @@
 //   the free vertices outside the body (the collision penalty of a vertex inside restates
 //   its depth); and the mean size of each term the residual balances (inertia, elastic,
 //   collision, friction).
-// - PoseNet's error per regressed dof (predicted − true, the dof's own units): its RMS and
-//   mean over predictions, and the error's lag-1 autocorrelation over consecutive frames
-//   of one input view, pooled over the dofs, as a correlation time τ = −1/ln ρ₁ (frames):
-//   what oracle_pose_noise (capture/training/pose_noise.h) draws from.
+// - PoseNet's error per regressed dof (predicted − true, the dof's own units): its RMS,
+//   mean and standard deviation about the mean over predictions, and the lag-1
+//   autocorrelation of the error about its mean over consecutive frames of one input view,
+//   pooled over the dofs, as a correlation time τ = −1/ln ρ₁ (frames): what
+//   oracle_pose_noise (capture/training/pose_noise.h) draws from.
 // With the config's oracle_pose the skeleton is posed by gt/pose.motion (the root
 // rotation error is then not measured), isolating the garment from pose error; with
 // oracle_pose_noise by that motion perturbed, every joint error still against the truth.
@@ -69,7 +70,7 @@ struct SplitEvaluation {
   double inertia_mean_n = kNotMeasured, elastic_mean_n = kNotMeasured, collision_mean_n = kNotMeasured, friction_mean_n = kNotMeasured;
   struct DofError {
     std::string name;
-    double rms = kNotMeasured, mean = kNotMeasured;
+    double rms = kNotMeasured, mean = kNotMeasured, std = kNotMeasured;  // std: about the mean
   };
   std::vector<DofError> dof_errors;  // PoseNet's (empty under the oracle pose)
   double dof_error_lag1 = kNotMeasured, dof_error_correlation_frames = kNotMeasured;

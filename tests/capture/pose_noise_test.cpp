@@ -71,6 +71,13 @@ TEST(PoseNoise, EachDofErrsWithItsSpreadAndCorrelationTime) {
   c.seed = 4, c.scale = 0.5;
   const Motion half = perturbed_motion(truth, s, c);
   EXPECT_NEAR(half.dofs(7, a), 0.5 * m.dofs(7, a), 1e-12);
+  // A bias is added to every frame, on top of the draws (scaled too).
+  c.scale = 1;
+  c.bias = {{s.dofs[a].name, 0.3}};
+  const Motion biased = perturbed_motion(truth, s, c);
+  EXPECT_NEAR((biased.dofs.col(a) - m.dofs.col(a)).cwiseAbs().maxCoeff(), 0.3, 1e-12);
+  EXPECT_NEAR((biased.dofs.col(a) - m.dofs.col(a)).minCoeff(), 0.3, 1e-12);
+  EXPECT_EQ(biased.dofs.col(b), m.dofs.col(b));
 }
 
 TEST(PoseNoise, PerturbedDofsStayInsideTheirLimits) {
@@ -95,6 +102,8 @@ TEST(PoseNoise, ErrorsNameTheFileAndTheKey) {
                {"c.yaml", "oracle_pose_noise", "oracle_pose is not true"});
   expect_error([&] { parse("oracle_pose: true\noracle_pose_noise: {seed: 2}\n"); },
                {"c.yaml", "oracle_pose_noise.spread", "missing"});
+  expect_error([&] { parse("oracle_pose: true\noracle_pose_noise: {bias: {a: 11}}\n"); },
+               {"c.yaml", "oracle_pose_noise.bias.a"});
   expect_error([&] { parse("oracle_pose: true\noracle_pose_noise: {spread: {a: 0.1}, scal: 2}\n"); },
                {"c.yaml", "scal"});
   expect_error([&] { parse("oracle_pose: true\noracle_pose_noise: {spread: {a: -0.1}}\n"); },
