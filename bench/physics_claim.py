@@ -21,10 +21,11 @@ import sys
 
 # (metric, per_frame key, kind): "ratio" of means, "points" difference of a fraction's
 # means, or "weighted:<key>" ratio of means weighted by another per-frame column (the
-# depth over the vertices inside, weighted by how many are inside: the mean over every
-# penetrating vertex of the pooled frames, the paper's Table 2).
+# depth over the vertices inside, weighted by the fraction inside, which is their count
+# over the garment's fixed number of free vertices: the mean over every penetrating vertex
+# of the pooled frames, the paper's Table 2).
 METRICS = [
-    ("penetration_mean_mm", "penetration_mean_mm", "weighted:penetrating_vertices"),
+    ("penetration_mean_mm", "penetration_mean_mm", "weighted:penetrating_fraction"),
     ("penetration_mean_all_mm", "penetration_mean_all_mm", "ratio"),
     ("penetrating_fraction", "penetrating_fraction", "ratio"),
     ("contact_fraction", "contact_fraction", "ratio"),
@@ -193,6 +194,8 @@ def main():
     if a.noise_arms:
         groups.append(("pose_noise_arap_only", [x for x in a.noise_arms.split(",") if x]))
     for baseline, arms in groups:
+        if not arms:
+            continue
         base = rows_of(baseline)
         for arm in arms:
             rows = rows_of(arm)
