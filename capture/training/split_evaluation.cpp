@@ -50,6 +50,27 @@ struct DofErrorPool {
     if (previous >= 0) pairs.emplace_back(errors.size() - 1, size_t(previous));
     return errors.size() - 1;
   }
+  // The statistics into e (names: the dofs' names in the errors' order); nothing when empty.
+  void summarise(const std::vector<std::string>& names, SplitEvaluation& e) const {
+    if (errors.empty()) return;
+    const double n = double(errors.size());
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(Eigen::Index(names.size())), sq = sum;
+    for (const Eigen::VectorXd& x : errors) sum += x, sq += x.cwiseAbs2();
+    const Eigen::VectorXd mean = sum / n;
+    for (size_t i = 0; i < names.size(); ++i)
+      e.dof_errors.push_back(
+          {names[i], std::sqrt(sq[i] / n), mean[i], std::sqrt(std::max(0.0, sq[i] / n - mean[i] * mean[i]))});
+    double product = 0, norm = 0;
+    for (const auto& [a, b] : pairs) {
+      const Eigen::VectorXd ca = errors[a] - mean, cb = errors[b] - mean;
+      product += ca.dot(cb), norm += 0.5 * (ca.squaredNorm() + cb.squaredNorm());
+    }
+    if (!(norm > 0)) return;
+    e.dof_error_lag1 = product / norm;
+    e.dof_error_correlation_frames = e.dof_error_lag1 >= 1 ? kNotMeasured
+                                     : e.dof_error_lag1 > 0 ? -1.0 / std::log(e.dof_error_lag1)
+                                                            : 0.0;
+  }
 };
 
 nlohmann::json distribution_json(const Distribution& d) {
@@ -349,26 +370,9 @@ SplitEvaluation evaluate_split(const std::string& config, const std::string& dat
   e.elastic_mean_n = balance.elastic.value();
   e.collision_mean_n = balance.collision.value();
   e.friction_mean_n = balance.friction.value();
-  if (!dof_err.errors.empty()) {
-    const double n = double(dof_err.errors.size());
-    Eigen::VectorXd sum = Eigen::VectorXd::Zero(param.free_dofs.size()), sq = sum;
-    for (const Eigen::VectorXd& x : dof_err.errors) sum += x, sq += x.cwiseAbs2();
-    const Eigen::VectorXd mean = sum / n;
-    for (size_t i = 0; i < param.free_dofs.size(); ++i)
-      e.dof_errors.push_back({ch.skeleton.dofs[param.free_dofs[i]].name, std::sqrt(sq[i] / n), mean[i],
-                              std::sqrt(std::max(0.0, sq[i] / n - mean[i] * mean[i]))});
-    double product = 0, norm = 0;
-    for (const auto& [a, b] : dof_err.pairs) {
-      const Eigen::VectorXd ca = dof_err.errors[a] - mean, cb = dof_err.errors[b] - mean;
-      product += ca.dot(cb), norm += 0.5 * (ca.squaredNorm() + cb.squaredNorm());
-    }
-    if (norm > 0) {
-      e.dof_error_lag1 = product / norm;
-      e.dof_error_correlation_frames = e.dof_error_lag1 > 0 && e.dof_error_lag1 < 1 ? -1.0 / std::log(e.dof_error_lag1)
-                                       : e.dof_error_lag1 >= 1                      ? kNotMeasured
-                                                                                    : 0.0;
-    }
-  }
+  std::vector<std::string> dof_names;
+  for (int d : param.free_dofs) dof_names.push_back(ch.skeleton.dofs[d].name);
+  dof_err.summarise(dof_names, e);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;
 }
