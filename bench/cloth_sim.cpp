@@ -8,7 +8,8 @@
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1), start_filter_per_vertex (0/1),
-// start_following_body (0/1),
+// start_following_body (0/1), secant_stiffness (0/1: the collision's secant stiffness along the
+// contact normal, on by default),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
 // (0/1), planar_step_bounds (0/1: the per-vertex collision bound along the normal only, or
 // scaling the whole move), smooth_creases (0/1: the body's concave creases, as weft synth's default),
@@ -143,6 +144,7 @@ int main(int argc_all, char** argv_all) {
     else if (key == "per_vertex_step_limits") s.newton.per_vertex_step_limits = value != "0";
     else if (key == "smooth_creases") s.collision_smooth_creases = value != "0";
     else if (key == "planar_step_bounds") s.collision_planar_step_bounds = value != "0";
+    else if (key == "secant_stiffness") s.collision_secant_stiffness = value != "0";
     else if (key == "factor_without_weak_pairs") s.newton.factor_without_weak_pairs = value != "0";
     else if (key == "nrelax" || key == "zrelax") {  // three comma-separated numbers
       double* out = key == "nrelax" ? s.newton.amalgamation.nrelax : s.newton.amalgamation.zrelax;

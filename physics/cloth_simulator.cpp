@@ -54,6 +54,7 @@ ClothSimulator::ClothSimulator(ClothMesh mesh, SimulationSettings settings)
   collision_->set_second_sheet_angle(settings_.collision_second_sheet_deg);
   collision_->set_smooth_creases(settings_.collision_smooth_creases);
   collision_->set_planar_step_bounds(settings_.collision_planar_step_bounds);
+  collision_->set_secant_stiffness(settings_.collision_secant_stiffness);
   friction_ = std::make_unique<FrictionEnergy>(n, *collision_, settings_.friction_velocity,
                                                settings_.time_step / settings_.substeps);
   solver_ = std::make_unique<NewtonSolver>(

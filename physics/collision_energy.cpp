@@ -187,6 +187,19 @@ double CollisionEnergy::add_feature_sum(int i, const Eigen::Vector3d& x, const B
 
 double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
                                  SparseHessian* H) const {
+  if (H && secant_stiffness_) {
+    // Keep this Hessian's own gradient for adjust_hessian, which follows at the same x.
+    hessian_x_ = x;
+    hessian_gradient_.setZero(x.size());
+    const double e = evaluate_terms(x, &hessian_gradient_, H);
+    if (g) *g += hessian_gradient_;
+    return e;
+  }
+  return evaluate_terms(x, g, H);
+}
+
+double CollisionEnergy::evaluate_terms(const Eigen::VectorXd& x, Eigen::VectorXd* g,
+                                       SparseHessian* H) const {
   double energy = 0;
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d xi = x.segment<3>(3 * i);
@@ -214,6 +227,29 @@ double CollisionEnergy::evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g,
     }
   }
   return energy;
+}
+
+void CollisionEnergy::adjust_hessian(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
+                                     SparseHessian& H) const {
+  if (!secant_stiffness_) return;
+  if (hessian_x_.size() != x.size() || hessian_x_ != x) {  // not the x of the last Hessian
+    hessian_x_ = x;
+    hessian_gradient_.setZero(x.size());
+    evaluate_terms(x, &hessian_gradient_, nullptr);
+  }
+  const Eigen::VectorXd& own = hessian_gradient_;
+  const double c = 0.5 * k_ / thickness_;  // force = c·gap² (N)
+  for (int i = 0; i < n_; ++i) {
+    const Eigen::Vector3d f = -own.segment<3>(3 * i);  // the collision force on vertex i
+    const double f0 = f.norm();
+    if (!(f0 > 0)) continue;
+    const Eigen::Vector3d n = f / f0;
+    const double gap0 = std::sqrt(f0 / c);
+    const double push = (g.segment<3>(3 * i) + f).dot(n);  // the rest's force toward the obstacle
+    const double gap_balance = push > 0 ? std::sqrt(push / c) : 0.0;
+    // The normal stiffness 2c·gap₀ in H becomes c·(gap₀ + gap*).
+    H.add_diagonal_block(i, (c * (gap_balance - gap0)) * (n * n.transpose()));
+  }
 }
 
 void CollisionEnergy::step_bound_samples(int i, const Eigen::Vector3d& xi, double reach,

@@ -73,6 +73,22 @@ class CollisionEnergy : public Energy {
     return d < thickness_ ? 0.5 * k_ / thickness_ * (thickness_ - d) * (thickness_ - d) : 0.0;
   }
 
+  // Secant stiffness along the contact normal (on by default). Newton's quadratic model
+  // of the cubic penalty (force c·gap², c = k/(2δ), tangent stiffness 2c·gap) is poor far
+  // from the balance: from a vertex stopped deep in the band (the step filter's δ/2, where
+  // the force is ~1e4 vertex weights) each iteration only halves the gap, and from a
+  // vertex barely in the band it overshoots deep. With it, a vertex in the band gets, along
+  // the direction n of its collision force f₀ = c·gap₀², instead of the tangent stiffness
+  // the secant one to where its own penalty would balance the rest's push F toward the
+  // obstacle (F = (g − g_collision)·n from the total gradient g):
+  //   c·(gap₀ + gap*),  gap* = √(max(F, 0)/c),
+  // so a decoupled vertex reaches its balance in one step, and at the balance (F = f₀) it
+  // is the tangent stiffness again: Newton's local convergence is kept. Only the Hessian
+  // (the direction) changes; the energy, the gradient and the line search do not.
+  void set_secant_stiffness(bool on) { secant_stiffness_ = on; }
+  bool secant_stiffness() const { return secant_stiffness_; }
+  void adjust_hessian(const Eigen::VectorXd& x, const Eigen::VectorXd& g, SparseHessian& H) const override;
+
   std::string name() const override { return "collision"; }
   double evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const override;
   void begin_step(const Eigen::VectorXd&) override { invalidate_cache(); }
@@ -112,6 +128,8 @@ class CollisionEnergy : public Energy {
 
  private:
   void invalidate_cache();
+  // evaluate's sum over the vertices and obstacles.
+  double evaluate_terms(const Eigen::VectorXd& x, Eigen::VectorXd* g, SparseHessian* H) const;
   // The distance samples (closest obstacle points with their normals) that bound vertex i's
   // move of length `reach` (m) from xi: every obstacle it might come within δ/2 of.
   // Refreshes the body distance cache.
@@ -133,6 +151,7 @@ class CollisionEnergy : public Energy {
   double second_sheet_deg_ = 0, second_sheet_cos_ = 2;  // off: no normal is that far
   bool smooth_creases_ = false;
   bool planar_step_bounds_ = true;
+  bool secant_stiffness_ = true;
   std::vector<SphereObstacle> spheres_;
   std::vector<const BodyMesh*> bodies_;
   // Per body and vertex: where the distance was last queried and its value. Distance is
@@ -142,6 +161,9 @@ class CollisionEnergy : public Energy {
     double d_ref = -std::numeric_limits<double>::infinity();
   };
   mutable std::vector<std::vector<CacheEntry>> cache_;
+  // The x of the last Hessian evaluation and this energy's own gradient there (for
+  // adjust_hessian; kept only with the secant stiffness).
+  mutable Eigen::VectorXd hessian_x_, hessian_gradient_;
 };
 
 }  // namespace weft::physics

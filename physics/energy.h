@@ -34,6 +34,16 @@ class Energy {
     (void)c;
     return false;
   }
+  // Called by the Newton solver once the Hessian H at x is assembled, with the total
+  // gradient g at x (all energies): an energy may replace part of its own Hessian in H by
+  // a stiffness that models its nonlinearity better along the step Newton is about to take
+  // (the collision's secant stiffness, CollisionEnergy::set_secant_stiffness). What it
+  // leaves in H must stay positive semi-definite where its own part was.
+  virtual void adjust_hessian(const Eigen::VectorXd& x, const Eigen::VectorXd& g, SparseHessian& H) const {
+    (void)x;
+    (void)g;
+    (void)H;
+  }
   // Per-vertex step limits: lowers limits[i] (n entries, in (0, 1]) to the largest
   // fraction of its own move dx_i that vertex i may take from x (e.g. not closer than
   // half the collision thickness to an obstacle, not past a friction slip reversal).

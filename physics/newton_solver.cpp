@@ -348,6 +348,7 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     report.residual_ms.push_back(ms_since(t_start));
     if (report.residual_history.back() <= options_.tolerance) return finish(StepStatus::converged);
     evaluate(x, nullptr, &hessian_, &report.energy_ms);
+    for (const Energy* en : energies_) en->adjust_hessian(x, g, hessian_);
     hessian_corrected_ = false;
     exact_differs_ = false;
     last_cg_outcome_ = CgOutcome::converged;
