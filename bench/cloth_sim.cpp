@@ -9,7 +9,7 @@
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
 // cg_relative_tolerance, start_from_prediction (0/1), start_filter_per_vertex (0/1),
 // start_following_body (0/1), secant_stiffness (0/1: the collision's secant stiffness along the
-// contact normal, on by default),
+// contact normal, off by default),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
 // (0/1), planar_step_bounds (0/1: the per-vertex collision bound along the normal only, or
 // scaling the whole move), smooth_creases (0/1: the body's concave creases, as weft synth's default),

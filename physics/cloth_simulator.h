@@ -54,8 +54,8 @@ struct SimulationSettings {
   // (CollisionEnergy::set_planar_step_bounds); false scales the vertex's whole move.
   bool collision_planar_step_bounds = true;
   // The collision's secant stiffness along the contact normal (CollisionEnergy::
-  // set_secant_stiffness); false: Newton's tangent stiffness.
-  bool collision_secant_stiffness = true;
+  // set_secant_stiffness); false: Newton's tangent stiffness (the default: no consistent gain).
+  bool collision_secant_stiffness = false;
   // ε_v (m/s) of the friction's smoothing (FrictionEnergy): a vertex slipping slower than
   // this against an obstacle feels less than the full Coulomb force, so "stuck" cloth
   // creeps at under ε_v (about 0.48·ε_v on a 20° slope with μ = 0.5). 1 cm/s (issue 41,

@@ -73,7 +73,7 @@ class CollisionEnergy : public Energy {
     return d < thickness_ ? 0.5 * k_ / thickness_ * (thickness_ - d) * (thickness_ - d) : 0.0;
   }
 
-  // Secant stiffness along the contact normal (on by default). Newton's quadratic model
+  // Secant stiffness along the contact normal (off by default). Newton's quadratic model
   // of the cubic penalty (force c·gap², c = k/(2δ), tangent stiffness 2c·gap) is poor far
   // from the balance: from a vertex stopped deep in the band (the step filter's δ/2, where
   // the force is ~1e4 vertex weights) each iteration only halves the gap, and from a
@@ -85,6 +85,9 @@ class CollisionEnergy : public Energy {
   // so a decoupled vertex reaches its balance in one step, and at the balance (F = f₀) it
   // is the tangent stiffness again: Newton's local convergence is kept. Only the Hessian
   // (the direction) changes; the energy, the gradient and the line search do not.
+  // Measured (issue 41, docs/notes/2026-12-06-contact-crawl-levers.md): with CG to 1e-2 it
+  // saves a tenth of the 4k drape's CPU time but costs the 3k skirt 9 % more Newton
+  // iterations and the 448-vertex windows 10 %, so it stays off.
   void set_secant_stiffness(bool on) { secant_stiffness_ = on; }
   bool secant_stiffness() const { return secant_stiffness_; }
   void adjust_hessian(const Eigen::VectorXd& x, const Eigen::VectorXd& g, SparseHessian& H) const override;
@@ -151,7 +154,7 @@ class CollisionEnergy : public Energy {
   double second_sheet_deg_ = 0, second_sheet_cos_ = 2;  // off: no normal is that far
   bool smooth_creases_ = false;
   bool planar_step_bounds_ = true;
-  bool secant_stiffness_ = true;
+  bool secant_stiffness_ = false;
   std::vector<SphereObstacle> spheres_;
   std::vector<const BodyMesh*> bodies_;
   // Per body and vertex: where the distance was last queried and its value. Distance is
