@@ -4,13 +4,19 @@
 // gives.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "capture/detection/keypoint_heatmaps.h"
 #include "capture/detection/person_detection.h"
 #include "capture/detection/person_detector.h"
 #include "capture/model/capture_networks.h"
+#include "capture/render/photos.h"
+#include "capture/studio/scene_dressing.h"
+#include "capture/studio/synthetic_studio.h"
+#include "capture/training/training_config.h"
 #include "graph/autograd.h"
 #include "tests/capture/stick_figure.h"
 #include "tests/capture/test_files.h"
@@ -182,4 +188,31 @@ TEST(PersonDetector, AModelWithoutADetectorSaysWhatToRetrain) {
   bool named = false;
   for (const auto& p : with.named_parameters()) named |= p.name.rfind("detector.stem_conv.weight", 0) == 0;
   EXPECT_TRUE(named);
+}
+
+TEST(PersonDetector, TheWildSequencesPhotosAreInNoTrainingShare) {
+  REQUIRE_DEBIAN_FILE("/usr/share/backgrounds/mate/nature/GreenMeadow.jpg", "mate-backgrounds");
+  // The photos the in-the-wild sequence over photographs draws (one per clip of its one
+  // view), and the training share of every shipped config that trains the detector.
+  const SynthConfig wild = load_synth_config(weft::capture::testing::repo_file("configs/synth/in_the_wild_photos.yaml"));
+  std::vector<std::string> drawn;
+  for (size_t k = 0; k < wild.motions.size(); ++k)
+    drawn.push_back(std::filesystem::path(wild.render.photos.at(
+                                              photo_background_index(wild.render.photos.size(), wild.seed, int(k), 0)))
+                        .filename()
+                        .string());
+  ASSERT_FALSE(drawn.empty());
+  int configs = 0;
+  for (const char* name : {"tiny", "default", "demo", "lifter", "paper"}) {
+    const TrainingConfig c = load_training_config(weft::capture::testing::repo_file(std::string("configs/train/") + name + ".yaml"));
+    if (c.stages[3].steps == 0) continue;
+    ++configs;
+    const AugmentationOptions& a = c.detector_augmentation;
+    ASSERT_FALSE(a.background_photos.empty()) << name << ": the training share must be stated";
+    for (const std::string& photo : drawn)
+      EXPECT_EQ(std::count(a.background_photos.begin(), a.background_photos.end(), photo), 0)
+          << name << ": " << photo << " is the wild sequence's background";
+    EXPECT_LT(a.background_photos.size(), list_photos(a.backgrounds, "test").size()) << name << ": no test share";
+  }
+  EXPECT_GE(configs, 1);  // demo.yaml trains one
 }
