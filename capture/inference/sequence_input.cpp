@@ -75,12 +75,35 @@ SequenceInput::SequenceInput(SequenceInputOptions o)
   if (!options_.keypoints.empty()) keypoints_ = FrameFiles(options_.keypoints, "_keypoints.json");
 }
 
+const char* input_source_name(InputSource s) {
+  switch (s) {
+    case InputSource::folder: return "folder";
+    case InputSource::detector: return "detector";
+    case InputSource::keying: return "keying";
+    case InputSource::none: return "none";
+  }
+  return "?";
+}
+
+InputSource SequenceInput::masks_from() const {
+  return !options_.masks.empty() ? InputSource::folder : options_.detector ? InputSource::detector : InputSource::keying;
+}
+
+InputSource SequenceInput::keypoints_from() const {
+  return !options_.keypoints.empty() ? InputSource::folder : options_.detector ? InputSource::detector : InputSource::none;
+}
+
 std::string SequenceInput::describe() const {
+  auto what = [](InputSource s, const std::string& folder, const char* otherwise) {
+    return s == InputSource::folder     ? folder
+           : s == InputSource::detector ? std::string("the model's person detector")
+                                        : std::string(otherwise);
+  };
   return fmt::format("input {} ({} frames{}); camera {}{}; masks: {}; keypoints: {}", options_.input, source_.size(),
                      source_.is_video() ? fmt::format(", {:.3g} fps", source_.fps()) : std::string(), cameras_.name(),
                      cameras_.per_frame() ? " (one per frame)" : "",
-                     options_.masks.empty() ? "green-screen keying" : options_.masks,
-                     options_.keypoints.empty() ? "none" : options_.keypoints);
+                     what(masks_from(), options_.masks, "green-screen keying"),
+                     what(keypoints_from(), options_.keypoints, "none"));
 }
 
 bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts) {
@@ -103,7 +126,15 @@ bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts)
     if (!path.empty()) f.detections = read_dataset_keypoints(path), f.has_detections = true;
   }
   lap("read");
-  if (!masks_.empty()) {
+  PersonDetection detected;
+  if (masks_from() == InputSource::detector || keypoints_from() == InputSource::detector) {
+    detected = std::move(detect_people(*options_.detector, {f.frame.bgr}).front());
+    if (keypoints_from() == InputSource::detector) f.detections = detected.keypoints, f.has_detections = detected.found;
+    lap("detect");
+  }
+  if (masks_from() == InputSource::detector) {
+    f.mask = detected.mask;
+  } else if (!masks_.empty()) {
     const std::string path = masks_.find(f.frame);
     WEFT_CHECK(!path.empty(), options_.masks, ": no mask for frame ", f.frame.name, " (expected ", f.frame.name,
                ".png)");
