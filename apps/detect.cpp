@@ -20,18 +20,21 @@ void add_detect_command(CLI::App& app) {
   auto o = std::make_shared<capture::DetectOptions>();
   auto truth = std::make_shared<std::string>();
   auto view = std::make_shared<std::string>("wild");
+  auto measure = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand(
       "detect",
       "Find the person in every frame of a video (or a folder of images) with the person detector of a model\n"
       "trained by `weft train` (network.detector, stages.detector): a coarse pass on the whole frame, then\n"
       "the crop. Writes OUT/keypoints/<frame>_keypoints.json (OpenPose BODY_25), OUT/masks/<frame>.png\n"
       "(255 person) and OUT/detect.json; `weft infer --keypoints OUT/keypoints --masks OUT/masks` reads them.\n"
-      "With --truth DATA, also OUT/detection_accuracy.json: mask IoU and keypoint errors against the dataset.");
-  cmd->add_option("--model", o->model, "Model folder: the --out folder of `weft train`")
-      ->required()->check(CLI::ExistingDirectory);
+      "With --truth DATA, also OUT/detection_accuracy.json: mask IoU and keypoint errors against the dataset.\n"
+      "With --measure DIR (a folder with keypoints/ and masks/, e.g. another detector's), only that measurement.");
+  cmd->add_option("--model", o->model, "Model folder: the --out folder of `weft train` (required unless --measure)")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--weights", o->weights, "Weights to use instead of the model folder's")->check(CLI::ExistingFile);
-  cmd->add_option("--input", o->input, "A video file, or a folder of images (frames in name order)")
-      ->required()->check(CLI::ExistingPath);
+  cmd->add_option("--input", o->input,
+                  "A video file, or a folder of images (frames in name order) (required unless --measure)")
+      ->check(CLI::ExistingPath);
   cmd->add_option("--max-frames", o->max_frames, "Only the first N frames")->check(CLI::NonNegativeNumber);
   cmd->add_option("--batch-size", o->batch_size, "Frames per pass of the detector (default 8)")
       ->check(CLI::PositiveNumber);
@@ -40,8 +43,22 @@ void add_detect_command(CLI::App& app) {
                   "masks, its ground-truth pose and its detections")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--truth-view", *view, "The dataset's view the input shows (default: wild)");
+  cmd->add_option("--measure", *measure,
+                  "Detect nothing: measure this folder's keypoints/<frame>_keypoints.json and masks/<frame>.png against "
+                  "--truth (written to OUT/detection_accuracy.json)")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--out", o->out, "Output folder (created if missing)")->required();
-  cmd->callback([o, truth, view] {
+  cmd->callback([o, truth, view, measure] {
+    if (!measure->empty()) {
+      if (truth->empty()) throw CLI::ValidationError("--measure", "needs --truth DATA");
+      const capture::DetectionAccuracy a = capture::measure_detections(*measure, *truth, *view);
+      for (const std::string& line : capture::detection_accuracy_lines(a)) spdlog::info("{}", line);
+      std::filesystem::create_directories(o->out);
+      write_text_atomically((std::filesystem::path(o->out) / "detection_accuracy.json").string(),
+                            capture::detection_accuracy_json(a));
+      return;
+    }
+    if (o->model.empty() || o->input.empty()) throw CLI::ValidationError("--model, --input", "required (unless --measure)");
     spdlog::info("weft detect --model {} --input {} --out {}", o->model, o->input, o->out);
     auto bar = std::make_unique<ProgressBar>("detect");
     const capture::DetectSummary s = capture::detect_sequence(*o, [&](int done, int total) { bar->update(done, total); });
