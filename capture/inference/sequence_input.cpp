@@ -114,7 +114,26 @@ bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts)
     if (parts) (*parts)[part] += std::chrono::duration<double>(now - t).count();
     t = now;
   };
-  if (!source_.next(f.frame)) return false;
+  const bool detecting = masks_from() == InputSource::detector || keypoints_from() == InputSource::detector;
+  PersonDetection detected;
+  if (!detecting) {
+    if (!source_.next(f.frame)) return false;
+  } else {
+    if (ahead_.empty()) {
+      std::vector<InputFrame> frames;
+      for (InputFrame g; int(frames.size()) < kDetectBatch && source_.next(g); g = InputFrame()) frames.push_back(g);
+      if (frames.empty()) return false;
+      lap("read");
+      std::vector<cv::Mat> images;
+      for (const InputFrame& g : frames) images.push_back(g.bgr);
+      std::vector<PersonDetection> found = detect_people(*options_.detector, images);
+      for (size_t i = 0; i < frames.size(); ++i) ahead_.emplace_back(std::move(frames[i]), std::move(found[i]));
+      lap("detect");
+    }
+    f.frame = std::move(ahead_.front().first);
+    detected = std::move(ahead_.front().second);
+    ahead_.pop_front();
+  }
   f.camera = cameras_.at(f.frame.id);
   WEFT_CHECK(f.frame.bgr.cols == f.camera.width && f.frame.bgr.rows == f.camera.height, options_.camera,
              ": camera '", f.camera.name, "' is for ", f.camera.width, "x", f.camera.height, " images, but frame ",
@@ -126,12 +145,7 @@ bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts)
     if (!path.empty()) f.detections = read_dataset_keypoints(path), f.has_detections = true;
   }
   lap("read");
-  PersonDetection detected;
-  if (masks_from() == InputSource::detector || keypoints_from() == InputSource::detector) {
-    detected = std::move(detect_people(*options_.detector, {f.frame.bgr}).front());
-    if (keypoints_from() == InputSource::detector) f.detections = detected.keypoints, f.has_detections = detected.found;
-    lap("detect");
-  }
+  if (keypoints_from() == InputSource::detector) f.detections = detected.keypoints, f.has_detections = detected.found;
   if (masks_from() == InputSource::detector) {
     f.mask = detected.mask;
   } else if (!masks_.empty()) {

@@ -6,6 +6,7 @@
 // green-screen keying and no detections.
 #include <opencv2/core.hpp>
 
+#include <deque>
 #include <map>
 #include <string>
 
@@ -74,6 +75,10 @@ class SequenceInput {
   SequenceInputOptions options_;
   CaptureCameras cameras_;
   FrameSource source_;
+  // With the detector: frames read ahead and detected in batches of kDetectBatch (one
+  // frame at a time costs about four times as much per frame), served in order.
+  static constexpr int kDetectBatch = 8;
+  std::deque<std::pair<InputFrame, PersonDetection>> ahead_;
   FrameFiles masks_, keypoints_;
 };
 
