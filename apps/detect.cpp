@@ -38,6 +38,8 @@ void add_detect_command(CLI::App& app) {
   cmd->add_option("--max-frames", o->max_frames, "Only the first N frames")->check(CLI::NonNegativeNumber);
   cmd->add_option("--batch-size", o->batch_size, "Frames per pass of the detector (default 8)")
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--overlays", o->overlays,
+                "Also OUT/overlays/<frame>.png: the mask's outline and the keypoints drawn over each frame");
   cmd->add_option("--truth", *truth,
                   "A dataset (weft synth) whose view --truth-view the input is: measure the detections against its "
                   "masks, its ground-truth pose and its detections")

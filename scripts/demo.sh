@@ -32,7 +32,7 @@ t0=$SECONDS
 rm -rf "$out/run" "$out/detect" "$out/capture" "$out/report"
 "$weft" train --config "$root/configs/train/$train.yaml" --data "$out/studio" --out "$out/run"
 if [ "$train" = demo ]; then
-  "$weft" detect --model "$out/run" --input "$out/clip/images/wild" --truth "$out/clip" --out "$out/detect"
+  "$weft" detect --model "$out/run" --input "$out/clip/images/wild" --truth "$out/clip" --overlays --out "$out/detect"
   "$weft" infer --model "$out/run" --input "$out/clip/images/wild" --camera "$out/clip/cameras.yaml" --out "$out/capture"
 else
   "$weft" infer --model "$out/run" --input "$out/clip/images/wild" --camera "$out/clip/cameras.yaml" \
@@ -43,7 +43,7 @@ echo "done in $((SECONDS - t0)) s after the build"
 echo "studio dataset: $out/studio (docs/DATASET.md); every view of one frame: $out/studio/preview.png"
 echo "model: $out/run (docs/TRAINING.md); loss curves: $out/run/losses.png"
 if [ "$train" = demo ]; then
-  echo "the person found in the clip: $out/detect/keypoints, masks (docs/CAPTURE.md); accuracy: $out/detect/detection_accuracy.json"
+  echo "the person found in the clip: $out/detect/keypoints, masks, overlays (docs/CAPTURE.md); accuracy: $out/detect/detection_accuracy.json"
 fi
 echo "capture of the clip: $out/capture (docs/CAPTURE.md); overlays: $out/capture/overlay.mp4"
 echo "report: $out/report/report.html"

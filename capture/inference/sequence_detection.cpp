@@ -3,7 +3,10 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <vector>
 
@@ -22,6 +25,22 @@ namespace weft::capture {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+cv::Mat detection_overlay(const cv::Mat& frame, const Body25& keypoints, const cv::Mat& mask) {
+  WEFT_CHECK(frame.type() == CV_8UC3 && mask.type() == CV_8UC1 && frame.size() == mask.size(),
+             "detection_overlay: expected a BGR frame and its 8-bit mask");
+  cv::Mat out = frame.clone();
+  std::vector<std::vector<cv::Point>> outline;
+  cv::findContours(mask.clone(), outline, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  cv::drawContours(out, outline, -1, cv::Scalar(0, 140, 255), 1, cv::LINE_AA);
+  for (int m = 0; m < kBody25Count; ++m) {
+    if (!(keypoints(m, 2) > 0)) continue;
+    const cv::Point p(int(std::lround(keypoints(m, 0))), int(std::lround(keypoints(m, 1))));
+    cv::circle(out, p, 2, cv::Scalar(40, 220, 40), cv::FILLED, cv::LINE_AA);
+    cv::putText(out, std::to_string(m), p + cv::Point(3, -2), cv::FONT_HERSHEY_PLAIN, 0.6, cv::Scalar(255, 255, 255), 1);
+  }
+  return out;
+}
+
 DetectSummary detect_sequence(const DetectOptions& o, const std::function<void(int, int)>& progress) {
   const auto t0 = Clock::now();
   WEFT_CHECK(o.batch_size >= 1, "weft detect: batch size ", o.batch_size, ", expected ≥ 1");
@@ -39,6 +58,7 @@ DetectSummary detect_sequence(const DetectOptions& o, const std::function<void(i
   const fs::path out(o.out);
   fs::create_directories(out / "keypoints");
   fs::create_directories(out / "masks");
+  if (o.overlays) fs::create_directories(out / "overlays");
   const int total = o.max_frames >= 0 ? std::min(o.max_frames, source.size()) : source.size();
   spdlog::info("detector of {} ({}², width {}, weights {}) on {} ({} frames)", o.model,
                model.network.detector.input_size, model.network.detector.width, model.weights, o.input, total);
@@ -59,6 +79,9 @@ DetectSummary detect_sequence(const DetectOptions& o, const std::function<void(i
       if (d.found) json.people.push_back(d.keypoints);
       write_openpose_json((out / "keypoints" / (batch[i].name + "_keypoints.json")).string(), json);
       write_png_atomically((out / "masks" / (batch[i].name + ".png")).string(), d.mask);
+      if (o.overlays)
+        write_png_atomically((out / "overlays" / (batch[i].name + ".png")).string(),
+                             detection_overlay(batch[i].bgr, d.keypoints, d.mask));
       int detected = 0;
       for (int m = 0; m < kBody25Count; ++m) detected += d.keypoints(m, 2) > 0;
       frames.push_back({{"id", batch[i].id}, {"name", batch[i].name}, {"person", d.found}, {"keypoints", detected},

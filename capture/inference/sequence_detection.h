@@ -10,8 +10,12 @@
 //                                         input, frames, timing
 // <name> is the frame's name (capture/inference/frame_source.h): what `weft infer` looks
 // for. Every file is written atomically.
+#include <opencv2/core.hpp>
+
 #include <functional>
 #include <string>
+
+#include "capture/io/openpose.h"
 
 namespace weft::capture {
 
@@ -22,7 +26,13 @@ struct DetectOptions {
   std::string out;
   int max_frames = -1;  // −1: all
   int batch_size = 8;   // frames per pass of the detector
+  // Also OUT/overlays/<name>.png: the frame with the mask's outline (orange) and the
+  // detected keypoints (green dots, labelled by BODY_25 index) drawn over it.
+  bool overlays = false;
 };
+
+// The frame (CV_8UC3) with a detection drawn over it, as OUT/overlays/ holds it.
+cv::Mat detection_overlay(const cv::Mat& frame, const Body25& keypoints, const cv::Mat& mask);
 
 struct DetectSummary {
   int frames = 0, found = 0;  // frames, and those where the coarse pass saw a person

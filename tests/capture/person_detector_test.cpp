@@ -12,6 +12,7 @@
 #include "capture/detection/keypoint_heatmaps.h"
 #include "capture/detection/person_detection.h"
 #include "capture/detection/person_detector.h"
+#include "capture/inference/sequence_detection.h"
 #include "capture/model/capture_networks.h"
 #include "capture/render/photos.h"
 #include "capture/studio/scene_dressing.h"
@@ -215,4 +216,22 @@ TEST(PersonDetector, TheWildSequencesPhotosAreInNoTrainingShare) {
     EXPECT_LT(a.background_photos.size(), list_photos(a.backgrounds, "test").size()) << name << ": no test share";
   }
   EXPECT_GE(configs, 1);  // demo.yaml trains one
+}
+
+TEST(PersonDetection, TheOverlayDrawsTheMasksOutlineAndTheDetectedKeypoints) {
+  const cv::Mat frame(40, 50, CV_8UC3, cv::Scalar(0, 0, 0));
+  cv::Mat mask = cv::Mat::zeros(40, 50, CV_8UC1);
+  cv::rectangle(mask, cv::Rect(10, 8, 20, 24), cv::Scalar(255), cv::FILLED);
+  Body25 k = Body25::Zero();
+  k.row(1) << 20, 20, 0.9;  // Neck
+  k.row(4) << 40, 5, 0.0;   // undetected: not drawn
+  const cv::Mat out = detection_overlay(frame, k, mask);
+  ASSERT_EQ(out.size(), frame.size());
+  const cv::Vec3b dot = out.at<cv::Vec3b>(20, 20), edge = out.at<cv::Vec3b>(8, 20), far = out.at<cv::Vec3b>(36, 45);
+  EXPECT_GT(dot[1], 150);  // green (BGR)
+  EXPECT_LT(dot[2], 100);
+  EXPECT_GT(edge[2], 150);  // orange outline on the mask's top edge
+  EXPECT_EQ(far, cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(out.at<cv::Vec3b>(5, 40), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(frame.at<cv::Vec3b>(20, 20), cv::Vec3b(0, 0, 0));  // the frame itself untouched
 }
