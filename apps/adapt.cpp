@@ -19,7 +19,7 @@ void add_adapt_command(CLI::App& app) {
       "adapt",
       "Domain adaptation, as the paper does before testing: refine both networks of a model trained\n"
       "by `weft train` on the test sequence itself, with the losses one camera gives (L_lm on the\n"
-      "sequence's OpenPose keypoints, L_sil on its masks or green-screen key, L_att, and L_arap or\n"
+      "sequence's keypoints, L_sil on its masks, L_att, and L_arap or\n"
       "L_sim as in the model's last stage): PoseNet for --iterations steps, then PADefNet. OUT is a\n"
       "model folder: capture the sequence with `weft infer --model OUT`. docs/CAPTURE.md.");
   cmd->add_option("--model", o->model, "Model folder to adapt (the --out of `weft train`)")
@@ -29,9 +29,13 @@ void add_adapt_command(CLI::App& app) {
   cmd->add_option("--camera", o->camera, "Its camera(s): OpenCV FileStorage YAML, as for `weft infer`")
       ->required()->check(CLI::ExistingFile);
   cmd->add_option("--camera-name", o->camera_name, "Which camera of the file (as for `weft infer`)");
-  cmd->add_option("--keypoints", o->keypoints, "OpenPose BODY_25 JSON per frame (required)")
-      ->required()->check(CLI::ExistingDirectory);
-  cmd->add_option("--masks", o->masks, "Person masks <frame>.png; default: green-screen keying")
+  cmd->add_option("--keypoints", o->keypoints,
+                  "OpenPose BODY_25 JSON per frame; default: the model's person detector (required for a model "
+                  "without one)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--masks", o->masks,
+                  "Person masks <frame>.png; default: the model's person detector, or green-screen keying for a model "
+                  "without one")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--config", o->config, "Capture settings for the keying (configs/infer/default.yaml)")
       ->check(CLI::ExistingFile);

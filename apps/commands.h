@@ -15,6 +15,7 @@ void add_bench_command(CLI::App& app);
 void add_synth_command(CLI::App& app);
 void add_train_command(CLI::App& app);
 void add_infer_command(CLI::App& app);
+void add_detect_command(CLI::App& app);
 void add_adapt_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 

@@ -19,7 +19,7 @@ void add_infer_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "infer",
       "Capture a single-camera video (or a folder of images) with a model trained by `weft train`:\n"
-      "segmentation (a mask folder, or green-screen keying), PoseNet and PADefNet per frame, the\n"
+      "segmentation (a mask folder, the model's person detector, or green-screen keying), PoseNet and PADefNet per frame, the\n"
       "temporal Gaussian filter over 5 frames, the global translation from OpenPose keypoints (or\n"
       "the silhouette), and the deformation layer. Writes OUT/meshes/{body,cloth}_<frame>.{ply,obj},\n"
       "pose.motion, pose.bvh, overlays/<frame>.png, overlay.mp4 and capture.json (what `weft eval`\n"
@@ -38,11 +38,14 @@ void add_infer_command(CLI::App& app) {
   cmd->add_option("--camera-name", o->camera_name,
                   "Which camera of the file (default: its only camera, or its only family of per-frame cameras "
                   "<name>_<frame>, e.g. wild_0003)");
-  cmd->add_option("--masks", o->masks, "Folder of person masks <frame>.png (255 person); default: green-screen keying")
+  cmd->add_option("--masks", o->masks,
+                  "Folder of person masks <frame>.png (255 person); default: the model's person detector, or "
+                  "green-screen keying for a model without one")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--keypoints", o->keypoints,
                   "Folder of OpenPose BODY_25 JSON (<frame>_keypoints.json): the global translation from the keypoint "
-                  "rays; without it, from the silhouette")
+                  "rays; default: the model's person detector, or, for a model without one, the translation from the "
+                  "silhouette")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--config", o->config, "Capture settings (configs/infer/default.yaml; default: its values)")
       ->check(CLI::ExistingFile);

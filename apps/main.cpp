@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   weft::apps::add_synth_command(app);
   weft::apps::add_train_command(app);
   weft::apps::add_infer_command(app);
+  weft::apps::add_detect_command(app);
   weft::apps::add_adapt_command(app);
   weft::apps::add_eval_command(app);
   weft::apps::add_nn_command(app);

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <algorithm>
+#include <memory>
 
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/capture_config.h"
@@ -29,7 +30,15 @@ int write_sequence_dataset(const AdaptOptions& o, const ModelFolder& model, cons
                            const fs::path& dir) {
   const fs::path staging = dir.string() + ".partial";
   fs::remove_all(staging);
-  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, keying});
+  // Without --masks or --keypoints the model's person detector finds them, when it has one.
+  std::unique_ptr<Character> character;
+  std::unique_ptr<CaptureNetworks> nets;
+  if ((o.masks.empty() || o.keypoints.empty()) && model.network.detector.enabled) {
+    character = std::make_unique<Character>(load_character(model.character));
+    nets = std::make_unique<CaptureNetworks>(*character, model.network, model.seed);
+    load_capture_networks(model.weights, *nets);
+  }
+  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, keying, nets ? nets->detector.get() : nullptr});
   spdlog::info("{}", input.describe());
   const std::string view = input.cameras().name();
   for (const char* sub : {"images", "masks", "keypoints"}) fs::create_directories(staging / sub / view);
@@ -50,8 +59,8 @@ int write_sequence_dataset(const AdaptOptions& o, const ModelFolder& model, cons
     ++n;
   }
   WEFT_CHECK(n > 0, o.input, ": no frames read");
-  WEFT_CHECK(detected > 0, o.keypoints, ": no OpenPose detections for any frame of ", o.input,
-             " (domain adaptation needs them: L_lm and the root translation)");
+  WEFT_CHECK(detected > 0, o.keypoints.empty() ? std::string("the person detector of ") + o.model : o.keypoints,
+             ": no detections for any frame of ", o.input, " (domain adaptation needs them: L_lm and the root translation)");
   write_cameras_yaml((staging / "cameras.yaml").string(), cameras);
   fs::copy(fs::path(model.character).parent_path(), staging / "character", fs::copy_options::recursive);
   const double fps = o.fps > 0 ? o.fps : input.source().fps() > 0 ? input.source().fps() : 30.0;
@@ -102,10 +111,15 @@ std::string adaptation_config(const ModelFolder& model, int iterations) {
       "# losses (capture/adaptation/domain_adaptation.h); generated from the model's config.\n"
       "seed: {}\n"
       "network: {{backbone: {}, input_size: {}, margin: {}, dof_scale: {}, angle_scale: {}, translation_scale_m: {}, "
-      "keypoint_input: {}}}\n"
+      "keypoint_input: {}{}}}\n"
       "stages:\n",
       model.dir, c.seed, c.network.backbone, c.network.input_size, c.network.margin, c.network.dof_scale,
-      c.network.angle_scale, c.network.translation_scale_m, c.network.keypoint_input);
+      c.network.angle_scale, c.network.translation_scale_m, c.network.keypoint_input,
+      // The detector is carried over as it is (the adaptation does not train it).
+      c.network.detector.enabled
+          ? fmt::format(", detector: {{input_size: {}, width: {}, margin: {}, sigma_px: {}}}", c.network.detector.input_size,
+                        c.network.detector.width, c.network.detector.margin, c.network.detector.sigma_px)
+          : std::string());
   LossWeights pose_weights;
   pose_weights.landmarks = c.stages[0].weights.landmarks > 0 ? c.stages[0].weights.landmarks : 1;
   y += stage_line("pose", iterations, c.stages[0], pose_weights);
@@ -124,10 +138,12 @@ std::string adaptation_config(const ModelFolder& model, int iterations) {
 }  // namespace
 
 AdaptSummary adapt_model(const AdaptOptions& o, const std::function<void(const TrainProgress&)>& progress) {
-  WEFT_CHECK(!o.keypoints.empty(), "weft adapt: --keypoints is required (L_lm and the root translation come from the "
-                                   "sequence's OpenPose detections)");
   WEFT_CHECK(o.iterations >= 1, "weft adapt: --iterations ", o.iterations, ", expected ≥ 1");
   const ModelFolder model = read_model_folder(o.model);
+  if (o.keypoints.empty() && !model.network.detector.enabled)
+    fail("weft adapt: --keypoints is required (L_lm and the root translation come from the sequence's OpenPose "
+         "detections), because ", o.model, " has no person detector to find them (retrain it with network.detector and "
+         "stages.detector.steps > 0; docs/TRAINING.md, \"The person detector\")");
   const CaptureConfig cfg = o.config.empty() ? CaptureConfig{} : load_capture_config(o.config);
   const fs::path out(o.out);
   WEFT_CHECK(fs::absolute(out).lexically_normal() != fs::absolute(o.model).lexically_normal(), o.out,

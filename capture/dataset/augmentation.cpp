@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "capture/io/portable_random.h"
 #include "files/strict_yaml.h"
@@ -24,7 +25,7 @@ AugmentationOptions parse_augmentation(const StrictYaml& y, const YAML::Node& n,
              {"contrast", &a.contrast, 0, 0.9},
              {"saturation", &a.saturation, 0, 1},
              {"background_probability", &a.background_probability, 0, 1}},
-            {}, {"backgrounds"});
+            {}, {"backgrounds", "background_photos"});
   if (n["backgrounds"]) {
     const std::string where = y.get<std::string>(n["backgrounds"], key + ".backgrounds", "a folder of photos");
     a.backgrounds = (y.dir / where).lexically_normal().string();
@@ -34,6 +35,17 @@ AugmentationOptions parse_augmentation(const StrictYaml& y, const YAML::Node& n,
       y.fail_at(n["backgrounds"], key + ".backgrounds",
                 "no .jpg, .jpeg or .png photo at " + a.backgrounds +
                     " (Debian's mate-backgrounds has /usr/share/backgrounds/mate/nature: scripts/setup.sh installs it)");
+    }
+  }
+  if (const YAML::Node names = n["background_photos"]) {
+    if (a.backgrounds.empty()) y.fail_at(names, key + ".background_photos", "needs " + key + ".backgrounds");
+    a.background_photos = y.strings(names, key + ".background_photos");
+    if (a.background_photos.empty())
+      y.fail_at(names, key + ".background_photos", "expected a list of photo file names (the training share)");
+    try {
+      select_photos(a.backgrounds, a.background_photos, key + ".background_photos");
+    } catch (const Error& e) {
+      y.fail_at(names, key + ".background_photos", e.what());
     }
   }
   if (a.background_probability > 0 && a.backgrounds.empty())
@@ -63,9 +75,26 @@ AugmentationDraw draw_augmentation(const AugmentationOptions& o, int photos, uin
   return d;
 }
 
-std::vector<cv::Mat> load_background_photos(const std::string& backgrounds, int max_side) {
+std::vector<std::string> select_photos(const std::string& backgrounds, const std::vector<std::string>& names,
+                                       const std::string& key) {
+  const std::vector<std::string> all = list_photos(backgrounds, key);
+  if (names.empty()) return all;
+  std::vector<std::string> out;
+  for (const std::string& name : names) {
+    const auto it = std::find_if(all.begin(), all.end(), [&](const std::string& p) {
+      return std::filesystem::path(p).filename().string() == name;
+    });
+    if (it == all.end()) fail(key, ": no photo '", name, "' in ", backgrounds);
+    if (std::find(out.begin(), out.end(), *it) != out.end()) fail(key, ": photo '", name, "' listed twice");
+    out.push_back(*it);
+  }
+  return out;
+}
+
+std::vector<cv::Mat> load_background_photos(const std::string& backgrounds, const std::vector<std::string>& names,
+                                            int max_side) {
   std::vector<cv::Mat> out;
-  for (const std::string& path : list_photos(backgrounds, "augmentation.backgrounds")) {
+  for (const std::string& path : select_photos(backgrounds, names, "augmentation.backgrounds")) {
     cv::Mat photo = cv::imread(path, cv::IMREAD_COLOR);
     WEFT_CHECK(!photo.empty(), path, ": cannot read this photo as an image");
     const double s = double(max_side) / std::max(photo.cols, photo.rows);

@@ -29,6 +29,9 @@ struct AugmentationOptions {
   double contrast = 0;    // (x − image mean)(1 + u) + image mean, u uniform in ±contrast
   double saturation = 0;  // (x − pixel grey)(1 + u) + pixel grey, u uniform in ±saturation
   std::string backgrounds;            // a folder (or file) of photos; "" none
+  // The training share of those photos: file names in `backgrounds` (empty: all of them).
+  // The rest are the test share, kept for test sequences (docs/TRAINING.md).
+  std::vector<std::string> background_photos;
   double background_probability = 0;  // per sample: the photo replaces what is outside the mask
   bool enabled() const {
     return shift > 0 || scale > 0 || brightness > 0 || contrast > 0 || saturation > 0 ||
@@ -50,9 +53,14 @@ struct AugmentationDraw {
 };
 AugmentationDraw draw_augmentation(const AugmentationOptions& options, int photos, uint64_t seed);
 
-// The photos of `backgrounds`, each scaled so its longer side is at most max_side pixels
-// (CV_8UC3 BGR). Errors name the folder.
-std::vector<cv::Mat> load_background_photos(const std::string& backgrounds, int max_side = 1024);
+// The photos of `backgrounds` (only those named in `names` when it is not empty), each
+// scaled so its longer side is at most max_side pixels (CV_8UC3 BGR). Errors name the folder.
+std::vector<cv::Mat> load_background_photos(const std::string& backgrounds, const std::vector<std::string>& names = {},
+                                            int max_side = 1024);
+// The paths of `backgrounds`'s photos named in `names` (all of them when empty); a name that
+// is not one of them is an error naming `key`.
+std::vector<std::string> select_photos(const std::string& backgrounds, const std::vector<std::string>& names,
+                                       const std::string& key);
 
 // `bgr` (CV_8UC3) with the pixels outside `mask` (CV_8UC1, nonzero = person) replaced by a
 // crop of `photo` resized to the image, as `draw` places it.

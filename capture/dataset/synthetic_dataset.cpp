@@ -362,7 +362,7 @@ SyntheticDataset::SyntheticDataset(const std::string& dir, DatasetOptions option
   }
   frames_ = split->second;
   if (options_.augmentation.background_probability > 0 && !options_.augmentation.backgrounds.empty())
-    photos_ = load_background_photos(options_.augmentation.backgrounds);
+    photos_ = load_background_photos(options_.augmentation.backgrounds, options_.augmentation.background_photos);
 
   const std::string cameras_path = (fs::path(dir) / "cameras.yaml").string();
   std::vector<Camera> cameras;

@@ -418,6 +418,8 @@ void write_capture_json(const CaptureContext& c, const ModelFolder& model, const
   j["view"] = input.cameras().name();
   j["masks"] = o.masks;
   j["keypoints"] = o.keypoints;
+  j["masks_from"] = input_source_name(input.masks_from());
+  j["keypoints_from"] = input_source_name(input.keypoints_from());
   j["fps"] = fps;
   j["filter"] = {{"sigma_frames", c.cfg.filter_sigma_frames}, {"radius_frames", c.cfg.filter_radius_frames}};
   j["collisions_resolved"] = o.resolve_collisions;
@@ -444,7 +446,9 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   nets.pose_net->train(false);
   nets.deformation_net->train(false);
   const CaptureModel capture_model(character, model.network);
-  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, cfg.keying});
+  // Without --masks or --keypoints the model's person detector finds them, when it has one.
+  PersonDetector* detector = o.masks.empty() || o.keypoints.empty() ? nets.detector.get() : nullptr;
+  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, cfg.keying, detector});
   WEFT_CHECK(!o.out.empty(), "weft infer: no output folder");
   const fs::path out(o.out);
   fs::create_directories(out / "meshes");

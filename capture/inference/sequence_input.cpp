@@ -75,12 +75,35 @@ SequenceInput::SequenceInput(SequenceInputOptions o)
   if (!options_.keypoints.empty()) keypoints_ = FrameFiles(options_.keypoints, "_keypoints.json");
 }
 
+const char* input_source_name(InputSource s) {
+  switch (s) {
+    case InputSource::folder: return "folder";
+    case InputSource::detector: return "detector";
+    case InputSource::keying: return "keying";
+    case InputSource::none: return "none";
+  }
+  return "?";
+}
+
+InputSource SequenceInput::masks_from() const {
+  return !options_.masks.empty() ? InputSource::folder : options_.detector ? InputSource::detector : InputSource::keying;
+}
+
+InputSource SequenceInput::keypoints_from() const {
+  return !options_.keypoints.empty() ? InputSource::folder : options_.detector ? InputSource::detector : InputSource::none;
+}
+
 std::string SequenceInput::describe() const {
+  auto what = [](InputSource s, const std::string& folder, const char* otherwise) {
+    return s == InputSource::folder     ? folder
+           : s == InputSource::detector ? std::string("the model's person detector")
+                                        : std::string(otherwise);
+  };
   return fmt::format("input {} ({} frames{}); camera {}{}; masks: {}; keypoints: {}", options_.input, source_.size(),
                      source_.is_video() ? fmt::format(", {:.3g} fps", source_.fps()) : std::string(), cameras_.name(),
                      cameras_.per_frame() ? " (one per frame)" : "",
-                     options_.masks.empty() ? "green-screen keying" : options_.masks,
-                     options_.keypoints.empty() ? "none" : options_.keypoints);
+                     what(masks_from(), options_.masks, "green-screen keying"),
+                     what(keypoints_from(), options_.keypoints, "none"));
 }
 
 bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts) {
@@ -91,7 +114,26 @@ bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts)
     if (parts) (*parts)[part] += std::chrono::duration<double>(now - t).count();
     t = now;
   };
-  if (!source_.next(f.frame)) return false;
+  const bool detecting = masks_from() == InputSource::detector || keypoints_from() == InputSource::detector;
+  PersonDetection detected;
+  if (!detecting) {
+    if (!source_.next(f.frame)) return false;
+  } else {
+    if (ahead_.empty()) {
+      std::vector<InputFrame> frames;
+      for (InputFrame g; int(frames.size()) < kDetectBatch && source_.next(g); g = InputFrame()) frames.push_back(g);
+      if (frames.empty()) return false;
+      lap("read");
+      std::vector<cv::Mat> images;
+      for (const InputFrame& g : frames) images.push_back(g.bgr);
+      std::vector<PersonDetection> found = detect_people(*options_.detector, images);
+      for (size_t i = 0; i < frames.size(); ++i) ahead_.emplace_back(std::move(frames[i]), std::move(found[i]));
+      lap("detect");
+    }
+    f.frame = std::move(ahead_.front().first);
+    detected = std::move(ahead_.front().second);
+    ahead_.pop_front();
+  }
   f.camera = cameras_.at(f.frame.id);
   WEFT_CHECK(f.frame.bgr.cols == f.camera.width && f.frame.bgr.rows == f.camera.height, options_.camera,
              ": camera '", f.camera.name, "' is for ", f.camera.width, "x", f.camera.height, " images, but frame ",
@@ -103,7 +145,10 @@ bool SequenceInput::next(SequenceFrame& f, std::map<std::string, double>* parts)
     if (!path.empty()) f.detections = read_dataset_keypoints(path), f.has_detections = true;
   }
   lap("read");
-  if (!masks_.empty()) {
+  if (keypoints_from() == InputSource::detector) f.detections = detected.keypoints, f.has_detections = detected.found;
+  if (masks_from() == InputSource::detector) {
+    f.mask = detected.mask;
+  } else if (!masks_.empty()) {
     const std::string path = masks_.find(f.frame);
     WEFT_CHECK(!path.empty(), options_.masks, ": no mask for frame ", f.frame.name, " (expected ", f.frame.name,
                ".png)");

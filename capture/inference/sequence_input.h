@@ -1,12 +1,16 @@
 #pragma once
 // A single-camera sequence as `weft infer` and `weft adapt` read it: per frame the image,
-// its camera, the person's mask (a mask folder, or green-screen keying) and the OpenPose
-// detections when a keypoint folder is given.
+// its camera, the person's mask and the OpenPose detections. Each comes from a given
+// folder when there is one; else from the model's person detector when it has one
+// (capture/detection/person_detection.h: from the pixels alone); else the mask from
+// green-screen keying and no detections.
 #include <opencv2/core.hpp>
 
+#include <deque>
 #include <map>
 #include <string>
 
+#include "capture/detection/person_detection.h"
 #include "capture/inference/capture_config.h"
 #include "capture/inference/frame_source.h"
 #include "capture/io/camera.h"
@@ -38,7 +42,13 @@ struct SequenceInputOptions {
   std::string masks;        // "" : green-screen keying
   std::string keypoints;    // "" : no detections
   KeyingConfig keying;
+  // The model's person detector (null: none): masks and detections where no folder gives them.
+  PersonDetector* detector = nullptr;
 };
+
+// Where a frame's mask and detections came from (capture.json's masks_from, keypoints_from).
+enum class InputSource { folder, detector, keying, none };
+const char* input_source_name(InputSource s);  // "folder", "detector", "keying", "none"
 
 struct SequenceFrame {
   InputFrame frame;
@@ -58,11 +68,17 @@ class SequenceInput {
   FrameSource& source() { return source_; }
   const CaptureCameras& cameras() const { return cameras_; }
   std::string describe() const;  // one line for the log
+  InputSource masks_from() const;
+  InputSource keypoints_from() const;
 
  private:
   SequenceInputOptions options_;
   CaptureCameras cameras_;
   FrameSource source_;
+  // With the detector: frames read ahead and detected in batches of kDetectBatch (one
+  // frame at a time costs about four times as much per frame), served in order.
+  static constexpr int kDetectBatch = 8;
+  std::deque<std::pair<InputFrame, PersonDetection>> ahead_;
   FrameFiles masks_, keypoints_;
 };
 

@@ -95,6 +95,16 @@ CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig
     pose_lift->push_back(std::make_shared<nn::Linear>(hidden, pose_outputs_, gen, true, DType::F32, false));
     register_module("pose_lift", pose_lift);
   }
+  if (config.detector.enabled) detector = register_module("detector", std::make_shared<PersonDetector>(config.detector, seed + 3));
+}
+
+PersonDetector& CaptureNetworks::require_detector(const std::string& model) const {
+  if (!detector)
+    fail(model, ": this model has no person detector (no detector.* weights; its config has no network.detector), so "
+         "weft cannot find the person's keypoints and mask itself. Retrain with a network.detector section and "
+         "stages.detector.steps > 0 (configs/train/demo.yaml has one; docs/TRAINING.md, \"The person detector\"), or "
+         "pass --keypoints and --masks");
+  return *detector;
 }
 
 Tensor CaptureNetworks::pose(const Batch& batch) {

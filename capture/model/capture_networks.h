@@ -25,6 +25,7 @@
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/deformation/deformation_layer.h"
 #include "capture/deformation/losses.h"
+#include "capture/detection/person_detector.h"
 #include "capture/io/camera.h"
 #include "capture/model/global_pose.h"
 #include "capture/model/network_config.h"
@@ -51,7 +52,7 @@ Eigen::Matrix3d root_rotation_world(const Character& character, const PoseParame
                                     const PosedCharacter& posed);
 
 // Both networks as one module (checkpoints hold both: "pose_net.*", "deformation_net.*",
-// and "pose_lift.*" with network.keypoint_input).
+// "pose_lift.*" with network.keypoint_input, and "detector.*" with network.detector).
 class CaptureNetworks : public nn::Module {
  public:
   CaptureNetworks(const Character& character, const NetworkConfig& config, uint64_t seed);
@@ -72,6 +73,11 @@ class CaptureNetworks : public nn::Module {
   // The lifting branch (null without network.keypoint_input): an MLP from the detections
   // (keypoint_lift_input) to an addition to pose_net's output, last layer zero at the start.
   std::shared_ptr<nn::Sequential> pose_lift;
+  // The person detector (null without network.detector): keypoints and mask from the image.
+  std::shared_ptr<PersonDetector> detector;
+  // The detector, or an error naming the model and what to retrain: `model` is the model
+  // folder (or weights) for the message.
+  PersonDetector& require_detector(const std::string& model) const;
   int64_t pose_outputs() const { return pose_outputs_; }
   int64_t deformation_outputs() const { return deformation_outputs_; }
 

@@ -4,6 +4,7 @@
 // networks (model_folder.h).
 #include <string>
 
+#include "capture/detection/person_detector.h"
 #include "files/strict_yaml.h"
 
 namespace weft::capture {
@@ -22,6 +23,10 @@ struct NetworkConfig {
   // false: PoseNet is the lifting branch alone (needs keypoint_input), the image network
   // does not run: a lifting network from the detections, as the field's 2D-to-3D lifters.
   bool image_input = true;
+  // The person detector (capture/detection/person_detector.h): present with a
+  // `network.detector` section, trained by stages.detector; what lets weft find the
+  // person's keypoints and mask itself.
+  DetectorConfig detector;
 };
 
 // Reads the `network` section `n` into `c` (absent keys keep their value); errors name the

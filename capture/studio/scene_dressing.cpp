@@ -65,12 +65,19 @@ Lighting draw_lighting(const StudioLightingConfig& c, uint64_t seed, int clip) {
   return l;
 }
 
+size_t photo_background_index(size_t count, uint64_t seed, int clip, int view) {
+  WEFT_CHECK(count > 0, "photo background: no photos to draw from");
+  PortableRandom rng(mix_seed(mix_seed(seed, kPhotoStream, static_cast<uint64_t>(clip)), static_cast<uint64_t>(view), 0));
+  return std::min(count - 1, static_cast<size_t>(rng.uniform() * count));
+}
+
 cv::Mat draw_photo_background(const std::vector<std::string>& photos, int width, int height, uint64_t seed, int clip,
                               int view) {
   WEFT_CHECK(!photos.empty(), "photo background: no photos to draw from");
   WEFT_CHECK(width > 0 && height > 0, "photo background: bad frame size ", width, "x", height);
   PortableRandom rng(mix_seed(mix_seed(seed, kPhotoStream, static_cast<uint64_t>(clip)), static_cast<uint64_t>(view), 0));
-  const size_t pick = std::min(photos.size() - 1, static_cast<size_t>(rng.uniform() * photos.size()));
+  rng.uniform();  // the pick's draw, made by photo_background_index from the same stream
+  const size_t pick = photo_background_index(photos.size(), seed, clip, view);
   const cv::Mat photo = cv::imread(photos[pick], cv::IMREAD_COLOR);
   WEFT_CHECK(!photo.empty(), photos[pick], ": cannot read this photo as an image");
   // The frame spans 50–100 % of the photo along its tighter axis.

@@ -47,5 +47,8 @@ Lighting draw_lighting(const StudioLightingConfig& config, uint64_t seed, int cl
 // uniform within it. Throws weft::Error naming the file when it cannot be read.
 cv::Mat draw_photo_background(const std::vector<std::string>& photos, int width, int height, uint64_t seed,
                               int clip, int view);
+// Which of `count` photos draw_photo_background takes for (seed, clip, view): the test
+// sequences' backgrounds, which a detector's training share of the photos must leave out.
+size_t photo_background_index(size_t count, uint64_t seed, int clip, int view);
 
 }  // namespace weft::capture

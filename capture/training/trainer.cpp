@@ -14,6 +14,8 @@
 
 #include "capture/character/skeletool_io.h"
 #include "capture/deformation/losses.h"
+#include "capture/detection/detection_losses.h"
+#include "capture/detection/person_detection.h"
 #include "capture/evaluation/frame_measures.h"
 #include "graph/atomic_file.h"
 #include "capture/io/portable_random.h"
@@ -121,6 +123,14 @@ class Trainer {
       frames.insert(frames.end(), val_->frames().begin(), val_->frames().end());
     }
     supervision_ = std::make_unique<MultiviewSupervision>(info_, frames, cfg_.silhouette_size);
+    if (cfg_.stages[3].steps > 0) {  // the person detector's crops: its own size, margin and augmentation
+      DatasetOptions dd;
+      dd.input_size = cfg_.network.detector.input_size;
+      dd.margin = cfg_.network.detector.margin;
+      dd.split = "train";
+      dd.augmentation = cfg_.detector_augmentation;
+      detector_train_ = std::make_unique<SyntheticDataset>(options.data, dd);
+    }
     if (cfg_.stages[0].steps > 0 && cfg_.stages[0].weights.virtual_landmarks > 0) {
       WEFT_CHECK(shards_ == 1, cfg_.file, ": virtual_poses: not available with data parallelism yet (", shards_,
                  " shards); train on one process, or set stages.pose.virtual_landmarks: 0");
@@ -194,8 +204,10 @@ class Trainer {
   // Averages the gradients of what `opt` steps, and the batch-norm statistics of the
   // network the stage trains, over the shards of every batch and the ranks.
   std::unique_ptr<nn::DataParallel> make_data_parallel(const StageConfig& stage, const nn::Optimizer& opt) {
-    const auto& net = stage.kind == StageKind::pose ? nets_.pose_net : nets_.deformation_net;
-    return std::make_unique<nn::DataParallel>(group_, opt.params(), net->named_buffers(), shards_);
+    const nn::Module& net = stage.kind == StageKind::pose       ? static_cast<const nn::Module&>(*nets_.pose_net)
+                            : stage.kind == StageKind::detector ? static_cast<const nn::Module&>(*nets_.detector)
+                                                                : static_cast<const nn::Module&>(*nets_.deformation_net);
+    return std::make_unique<nn::DataParallel>(group_, opt.params(), net.named_buffers(), shards_);
   }
   std::unique_ptr<nn::Optimizer> make_optimizer(const StageConfig& stage) {
     nn::AdamWOptions o;
@@ -204,6 +216,8 @@ class Trainer {
     std::vector<nn::NamedTensor> params;
     if (stage.kind == StageKind::pose)
       params = nets_.pose_parameters();
+    else if (stage.kind == StageKind::detector)
+      for (nn::NamedTensor p : nets_.detector->named_parameters()) params.push_back({"detector." + p.name, p.tensor});
     else
       for (nn::NamedTensor p : nets_.deformation_net->named_parameters())
         params.push_back({"deformation_net." + p.name, p.tensor});
@@ -236,6 +250,41 @@ class Trainer {
   CaptureNetworks nets_;
   Faces faces_;
   std::unique_ptr<SyntheticDataset> train_, val_;
+  std::unique_ptr<SyntheticDataset> detector_train_;  // the detector stage's crops (null without the stage)
+  // The detector stage's terms on a batch of its crops: L_hm against Gaussians at the
+  // detections, L_mask against the masks at the mask grid; `px` and `iou` get the decoded
+  // keypoints' mean error (crop pixels, confident labels) and the mask IoU at the grid.
+  std::map<std::string, Tensor> detector_terms(const Batch& batch, double* px, double* iou) {
+    const DetectorConfig& dc = cfg_.network.detector;
+    const HeatmapCodec codec = detector_codec(dc);
+    nets_.detector->train();
+    const DetectorOutput out = nets_.detector->run(batch.images);
+    const HeatmapTargets t = encode_heatmaps(batch.keypoints, codec);
+    const Tensor mask_target = ops::avg_pool2d(batch.masks, DetectorConfig::kMaskStride, DetectorConfig::kMaskStride);
+    std::map<std::string, Tensor> terms;
+    terms["heatmaps"] = heatmap_loss(out.heatmaps, t.heatmaps, t.weights);
+    terms["mask"] = mask_loss(out.mask_logits, mask_target);
+    double error = 0, count = 0, inter = 0, uni = 0;
+    const float* kp = batch.keypoints.data<float>();
+    const float* z = out.mask_logits.data<float>();
+    const float* m = mask_target.data<float>();
+    for (int64_t b = 0; b < batch.size(); ++b) {
+      const Body25 k = decode_heatmaps(out.heatmaps, b, codec);
+      for (int j = 0; j < kBody25Count; ++j) {
+        const float* label = kp + (b * kBody25Count + j) * 3;
+        if (!(label[2] >= 0.1)) continue;
+        error += k(j, 2) > 0 ? std::hypot(k(j, 0) - label[0], k(j, 1) - label[1]) : double(dc.input_size);
+        count += 1;
+      }
+    }
+    for (int64_t i = 0; i < mask_target.numel(); ++i) {
+      const bool p = z[i] > 0, y = m[i] >= 0.5f;
+      inter += p && y, uni += p || y;
+    }
+    *px = count > 0 ? error / count : 0;
+    *iou = uni > 0 ? inter / uni : 1;
+    return terms;
+  }
   std::unique_ptr<MultiviewSupervision> supervision_;
   std::unique_ptr<VirtualPoses> virtual_;  // the pose stage's virtual poses (null: none)
   // L_lm of the lifting branch alone on the step's virtual poses (virtual_poses.h).
@@ -530,7 +579,8 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   for (const Batch& batch : shards) {
     const double share = double(batch.size()) / batch.whole_size;
     dp.begin_shard();
-    const CapturePrediction p = forward(batch, stage.kind, true, &times);
+    const bool detecting = stage.kind == StageKind::detector;
+    const CapturePrediction p = detecting ? CapturePrediction() : forward(batch, stage.kind, true, &times);
     auto t = Clock::now();
     // The simulation runs on TBB threads while this thread computes the image losses.
     const bool simulating = stage.kind == StageKind::physics && stage.weights.simulation > 0;
@@ -538,8 +588,17 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
     if (simulating)
       simulated = std::async(std::launch::async, [&] { return simulate(p, batch, r); });
     LandmarkStatistics stats;
-    std::map<std::string, Tensor> terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
-    times.lap("losses", t);
+    std::map<std::string, Tensor> terms;
+    if (detecting) {
+      double px = 0, iou = 0;
+      terms = detector_terms(batch, &px, &iou);
+      add("detector_px", share, px);
+      add("detector_iou", share, iou);
+      times.lap("detector and its losses", t);
+    } else {
+      terms = image_and_regulariser_terms(p, batch, stage.weights, &stats);
+      times.lap("losses", t);
+    }
     if (stage.kind == StageKind::pose && stage.weights.virtual_landmarks > 0) {
       LandmarkStatistics virtual_stats;
       terms["virtual_landmarks"] = virtual_landmark_term(step, &virtual_stats);
@@ -559,7 +618,7 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
       const Tensor wt = ops::scale(t, w);
       total = total.defined() ? ops::add(total, wt) : wt;
     }
-    add("keypoint_px", share, stats.mean_error_px);
+    if (!detecting) add("keypoint_px", share, stats.mean_error_px);
     WEFT_CHECK(total.defined(), cfg_.file, ": stages.", stage_name(stage.kind), ": every loss weight is 0");
     add("total", share, total.item());
     opt.zero_grad();
@@ -573,7 +632,7 @@ Trainer::StepResult Trainer::train_step(int64_t step, const StageConfig& stage, 
   static const std::vector<std::string> kFigures = [] {
     std::vector<std::string> names;
     for (const LossTerm& term : loss_terms()) names.push_back(term.name);
-    names.insert(names.end(), {"keypoint_px", "virtual_keypoint_px", "total"});
+    names.insert(names.end(), {"keypoint_px", "virtual_keypoint_px", "detector_px", "detector_iou", "total"});
     return names;
   }();
   static const physics::StepStatus kFailures[] = {physics::StepStatus::max_iterations,
@@ -919,7 +978,9 @@ std::vector<Batch> Trainer::step_shards(int64_t step, const StageConfig& s, int6
     po.first_batch = step - stage_start - 1;
     po.shard = group_.rank();
     po.shards = group_.size();
-    st.prefetcher = std::make_unique<DatasetPrefetcher>(*train_, po);
+    const SyntheticDataset& data = s.kind == StageKind::detector ? *detector_train_ : *train_;
+    po.drop_last = data.size() >= s.batch_size;
+    st.prefetcher = std::make_unique<DatasetPrefetcher>(data, po);
     st.prefetcher_stage = &s;
   }
   return local_shards(st.prefetcher->next());

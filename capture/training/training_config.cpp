@@ -17,6 +17,7 @@ const char* stage_name(StageKind kind) {
     case StageKind::pose: return "pose";
     case StageKind::warmup: return "warmup";
     case StageKind::physics: return "physics";
+    case StageKind::detector: return "detector";
   }
   return "?";
 }
@@ -41,6 +42,10 @@ const std::vector<LossTerm>& loss_terms() {
       {"virtual_landmarks", &LossWeights::virtual_landmarks,
        "L_lm of PoseNet's lifting branch alone on virtual poses: motions no camera filmed, their detections drawn "
        "from the detector error model in the dataset's cameras"},
+      {"heatmaps", &LossWeights::heatmaps,
+       "L_hm: the person detector's keypoint heatmaps against Gaussians at the dataset's detections, squared error "
+       "per heatmap weighted by the detection's confidence"},
+      {"mask", &LossWeights::mask, "L_mask: the person detector's mask logits against the dataset's mask, binary cross-entropy"},
   };
   return table;
 }
@@ -77,6 +82,15 @@ void parse_stage(const StrictYaml& y, const YAML::Node& n, StageConfig& s) {
     y.fail_at(n, where + "landmarks",
               "the pose stage trains PoseNet on landmarks, keypoints_3d, lumbopelvic and virtual_landmarks only: "
               "other weights must be 0");
+  const bool detector_term = s.weights.heatmaps > 0 || s.weights.mask > 0;
+  if (s.kind == StageKind::detector) {
+    for (const LossTerm& t : loss_terms())
+      if (t.weight != &LossWeights::heatmaps && t.weight != &LossWeights::mask && s.weights.*t.weight > 0)
+        y.fail_at(n[t.name], where + t.name, "the detector stage trains the person detector on heatmaps and mask only");
+  } else if (detector_term) {
+    const char* key = s.weights.heatmaps > 0 ? "heatmaps" : "mask";
+    y.fail_at(n[key], where + key, "the person detector learns in stages.detector only");
+  }
   if (s.kind != StageKind::pose && s.weights.virtual_landmarks > 0)
     y.fail_at(n["virtual_landmarks"], where + "virtual_landmarks",
               "PoseNet learns in the pose stage only: the virtual poses belong there");
@@ -95,7 +109,7 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
   y.check_keys(root, "", {"seed", "network", "stages", "silhouette_size", "loader_threads", "log_every",
                           "validate_every", "validation_samples", "checkpoint_every", "keep_checkpoints",
                           "shards", "oracle_pose", "oracle_pose_noise", "physics", "augmentation", "lumbar_share",
-                          "virtual_poses"});
+                          "virtual_poses", "detector_augmentation"});
   TrainingConfig c;
   c.file = name;
   if (root["seed"]) c.seed = y.get<uint64_t>(root["seed"], "seed", "a non-negative integer");
@@ -108,9 +122,12 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
              {"checkpoint_every", &c.checkpoint_every, 1, 1e8},
              {"keep_checkpoints", &c.keep_checkpoints, 1, 1000},
              {"shards", &c.shards, 0, 4096}},
-            {"seed", "network", "stages", "oracle_pose", "oracle_pose_noise", "physics", "augmentation", "virtual_poses"});
+            {"seed", "network", "stages", "oracle_pose", "oracle_pose_noise", "physics", "augmentation", "virtual_poses",
+             "detector_augmentation"});
   if (root["virtual_poses"]) c.virtual_poses = parse_virtual_pose_config(y, root["virtual_poses"]);
   if (root["augmentation"]) c.augmentation = parse_augmentation(y, root["augmentation"], "augmentation");
+  if (root["detector_augmentation"])
+    c.detector_augmentation = parse_augmentation(y, root["detector_augmentation"], "detector_augmentation");
   if (root["oracle_pose"]) c.oracle_pose = y.get<bool>(root["oracle_pose"], "oracle_pose", "true or false");
   if (const YAML::Node n = root["oracle_pose_noise"]) {
     if (!c.oracle_pose)
@@ -118,17 +135,23 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
     c.oracle_pose_noise = parse_pose_noise(y, n, "oracle_pose_noise");
   }
   if (root["network"]) parse_network_config(y, root["network"], c.network);
-  for (StageKind kind : {StageKind::pose, StageKind::warmup, StageKind::physics}) {
+  for (StageKind kind : {StageKind::pose, StageKind::warmup, StageKind::physics, StageKind::detector}) {
     StageConfig s;
     s.kind = kind;
     c.stages.push_back(s);
   }
-  if (!root["stages"]) y.fail_at(root, "stages", "missing: the stages section (pose, warmup, physics)");
+  if (!root["stages"]) y.fail_at(root, "stages", "missing: the stages section (pose, warmup, physics, detector)");
   const YAML::Node st = root["stages"];
-  y.check_keys(st, "stages.", {"pose", "warmup", "physics"});
+  y.check_keys(st, "stages.", {"pose", "warmup", "physics", "detector"});
   for (StageConfig& s : c.stages)
     if (const YAML::Node n = st[stage_name(s.kind)]) parse_stage(y, n, s);
   if (c.total_steps() == 0) y.fail_at(st, "stages", "every stage has 0 steps: nothing to train");
+  if (c.stages[3].steps > 0 && !c.network.detector.enabled)
+    y.fail_at(st["detector"], "stages.detector",
+              "trains the person detector, but the config has no network.detector section (input_size, width, margin, "
+              "sigma_px)");
+  if (root["detector_augmentation"] && c.stages[3].steps == 0)
+    y.fail_at(root["detector_augmentation"], "detector_augmentation", "augments the detector stage, which has 0 steps");
   if (c.stages[0].weights.virtual_landmarks > 0) {
     if (!c.virtual_poses.enabled())
       y.fail_at(st["pose"]["virtual_landmarks"], "stages.pose.virtual_landmarks",

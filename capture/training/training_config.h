@@ -26,6 +26,8 @@ struct LossWeights {
   double simulation = 0;  // L_sim
   double lumbopelvic = 0; // L_lp: the pelvis's share of the trunk's lean (a prior; deformation/losses.h)
   double virtual_landmarks = 0;  // L_lm of the lifting branch alone on virtual poses (virtual_poses.h)
+  double heatmaps = 0;    // L_hm: the person detector's keypoint heatmaps (capture/detection/detection_losses.h)
+  double mask = 0;        // L_mask: the person detector's mask (binary cross-entropy)
 };
 
 // The loss terms of training, one entry each: `name` is the key of its weight under
@@ -42,9 +44,10 @@ struct LossTerm {
 const std::vector<LossTerm>& loss_terms();
 
 // The stages, in the order they run: (a) PoseNet on L_lm (and L_3d); (b) PADefNet's warm start with
-// PoseNet frozen; (c) the physics-aware stage (PoseNet frozen).
-enum class StageKind { pose, warmup, physics };
-const char* stage_name(StageKind kind);  // "pose", "warmup", "physics"
+// PoseNet frozen; (c) the physics-aware stage (PoseNet frozen); then the person detector
+// (network.detector) on L_hm + L_mask, which none of the others reads.
+enum class StageKind { pose, warmup, physics, detector };
+const char* stage_name(StageKind kind);  // "pose", "warmup", "physics", "detector"
 
 struct StageConfig {
   StageKind kind = StageKind::pose;
@@ -79,7 +82,7 @@ struct TrainingConfig {
   std::string file;
   uint64_t seed = 0;
   NetworkConfig network;
-  std::vector<StageConfig> stages;  // pose, warmup, physics (all three, steps may be 0)
+  std::vector<StageConfig> stages;  // pose, warmup, physics, detector (all four, steps may be 0)
   int silhouette_size = 128;   // distance transforms of every view at this size (longest side, px)
   int loader_threads = 1;      // TBB threads loading batches ahead
   int log_every = 10;          // steps between log lines
@@ -108,6 +111,10 @@ struct TrainingConfig {
   // The train split's samples, augmented (capture/dataset/augmentation.h); validation and
   // evaluation read the images as they are.
   AugmentationOptions augmentation;
+  // The detector stage's samples (`detector_augmentation`, the same keys): wider shifts and
+  // scales (its coarse pass sees the whole frame) and photos behind the person, from the
+  // training share of the photos (background_photos) only.
+  AugmentationOptions detector_augmentation;
   PhysicsConfig physics;
   // Poses no camera filmed, for the lifting branch (stages.pose.virtual_landmarks weighs
   // their L_lm; capture/training/virtual_poses.h). Off without a virtual_poses section.

@@ -14,6 +14,8 @@
 #include "capture/inference/capture_config.h"
 #include "capture/inference/frame_source.h"
 #include "capture/inference/green_screen.h"
+#include "capture/inference/sequence_input.h"
+#include "capture/io/camera.h"
 #include "capture/inference/temporal_filter.h"
 #include "capture/motion/skeleton_bvh.h"
 #include "capture/render/renderer.h"
@@ -212,4 +214,55 @@ TEST(SkeletonBvh, ReproducesTheChainEndsOfEveryFrame) {
   const BvhMotion sm = skeleton_motion_bvh(s, spin, 1.0 / 30);
   for (int f = 1; f < 200; ++f)
     for (int c = 3; c < 6; ++c) EXPECT_LT(std::abs(sm.frames(f, c) - sm.frames(f - 1, c)), 10.0) << f << " " << c;
+}
+
+TEST(SequenceInput, TakesMasksAndKeypointsFromFoldersElseTheDetectorElseKeying) {
+  ScratchDir frames("frames"), masks("masks"), out("cameras");
+  for (int id : {0, 1}) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "%04d.png", id);
+    cv::imwrite(frames.file(name), cv::Mat(40, 48, CV_8UC3, cv::Scalar(40, 180, 40)));
+    cv::Mat m = cv::Mat::zeros(40, 48, CV_8UC1);
+    cv::rectangle(m, cv::Rect(10, 5, 8, 20), cv::Scalar(255), cv::FILLED);
+    cv::imwrite(masks.file(name), m);
+  }
+  Camera cam;
+  cam.name = "cam";
+  cam.K << 50, 0, 24, 0, 50, 20, 0, 0, 1;
+  cam.width = 48;
+  cam.height = 40;
+  write_cameras_yaml(out.file("cameras.yaml"), {cam});
+  DetectorConfig dc;
+  dc.enabled = true;
+  dc.input_size = 32;
+  dc.width = 4;
+  PersonDetector detector(dc, 3);
+  {
+    // No folders, no detector: keying, no detections (as before the detector existed).
+    SequenceInput in({frames.file(""), out.file("cameras.yaml"), "", "", "", KeyingConfig{}});
+    EXPECT_EQ(in.masks_from(), InputSource::keying);
+    EXPECT_EQ(in.keypoints_from(), InputSource::none);
+  }
+  {
+    // A detector and no folders: both from the detector, a mask of the frame's size.
+    SequenceInput in({frames.file(""), out.file("cameras.yaml"), "", "", "", KeyingConfig{}, &detector});
+    EXPECT_EQ(in.masks_from(), InputSource::detector);
+    EXPECT_EQ(in.keypoints_from(), InputSource::detector);
+    EXPECT_NE(in.describe().find("person detector"), std::string::npos) << in.describe();
+    SequenceFrame f;
+    ASSERT_TRUE(in.next(f));
+    EXPECT_EQ(f.mask.size(), cv::Size(48, 40));
+    EXPECT_EQ(f.mask.type(), CV_8UC1);
+  }
+  {
+    // A mask folder overrides the detector's masks; the keypoints still come from it.
+    SequenceInput in({frames.file(""), out.file("cameras.yaml"), "", masks.file(""), "", KeyingConfig{}, &detector});
+    EXPECT_EQ(in.masks_from(), InputSource::folder);
+    EXPECT_EQ(in.keypoints_from(), InputSource::detector);
+    SequenceFrame f;
+    ASSERT_TRUE(in.next(f));
+    EXPECT_EQ(cv::countNonZero(f.mask), 8 * 20);
+  }
+  EXPECT_STREQ(input_source_name(InputSource::detector), "detector");
+  EXPECT_STREQ(input_source_name(InputSource::keying), "keying");
 }

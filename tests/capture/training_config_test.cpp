@@ -6,6 +6,7 @@
 
 #include "capture/training/training_config.h"
 #include "test_files.h"
+#include "tests/test_requirements.h"
 
 using namespace weft;
 using namespace weft::capture;
@@ -22,7 +23,7 @@ TEST(TrainingConfig, ShippedConfigsParse) {
   for (const char* name : {"tiny", "default", "demo", "lifter", "paper"}) {
     const TrainingConfig c = load_training_config(repo_file(std::string("configs/train/") + name + ".yaml"));
     EXPECT_GT(c.total_steps(), 0) << name;
-    ASSERT_EQ(c.stages.size(), 3u);
+    ASSERT_EQ(c.stages.size(), 4u);
     EXPECT_EQ(c.stages[0].kind, StageKind::pose);
     EXPECT_GT(c.stages[2].steps, 0) << name << ": the physics stage";
   }
@@ -52,6 +53,53 @@ TEST(TrainingConfig, StagesFollowEachOther) {
   EXPECT_EQ(c.stage_of(4, &start).kind, StageKind::warmup);
   EXPECT_EQ(start, 3);
   expect_error([&] { c.stage_of(6); }, {"t.yaml", "step 6", "5 steps"});
+}
+
+TEST(TrainingConfig, TheDetectorStageNeedsItsNetworkAndTrainsOnItsOwnTerms) {
+  REQUIRE_DEBIAN_FILE("/usr/share/backgrounds/mate/nature/Aqua.jpg", "mate-backgrounds");
+  const TrainingConfig c = parse_training_config(
+      "network: {detector: {input_size: 96, width: 8, margin: 0.3, sigma_px: 2}}\n"
+      "stages:\n  detector: {steps: 5, batch_size: 4, heatmaps: 1, mask: 0.5}\n"
+      "detector_augmentation: {shift: 0.2, scale: 0.5, backgrounds: /usr/share/backgrounds/mate/nature,\n"
+      "  background_probability: 0.8, background_photos: [Aqua.jpg, Dune.jpg]}\n",
+      "c.yaml");
+  ASSERT_EQ(c.stages.size(), 4u);
+  EXPECT_EQ(c.stages[3].kind, StageKind::detector);
+  EXPECT_STREQ(stage_name(c.stages[3].kind), "detector");
+  EXPECT_EQ(c.stages[3].steps, 5);
+  EXPECT_EQ(c.stages[3].weights.heatmaps, 1);
+  EXPECT_EQ(c.stages[3].weights.mask, 0.5);
+  EXPECT_TRUE(c.network.detector.enabled);
+  EXPECT_EQ(c.network.detector.input_size, 96);
+  EXPECT_EQ(c.network.detector.width, 8);
+  EXPECT_EQ(c.network.detector.margin, 0.3);
+  EXPECT_EQ(c.detector_augmentation.background_photos, (std::vector<std::string>{"Aqua.jpg", "Dune.jpg"}));
+  EXPECT_FALSE(parse_training_config(kStages, "c.yaml").network.detector.enabled);
+  // Each error names the key.
+  expect_error([] { parse_training_config("stages:\n  detector: {steps: 5, heatmaps: 1}\n", "c.yaml"); },
+               {"c.yaml", "stages.detector", "network.detector"});
+  expect_error([] { parse_training_config("network: {detector: {input_size: 100}}\n" + std::string(kStages), "c.yaml"); },
+               {"c.yaml", "network.detector.input_size", "multiple of 16"});
+  expect_error([] { parse_training_config("network: {detector: {depth: 3}}\n" + std::string(kStages), "c.yaml"); },
+               {"c.yaml", "network.detector", "depth"});
+  expect_error([] { parse_training_config("stages:\n  pose: {steps: 4, landmarks: 1, heatmaps: 1}\n", "c.yaml"); },
+               {"c.yaml", "stages.pose.heatmaps", "stages.detector only"});
+  expect_error(
+      [] {
+        parse_training_config("network: {detector: {}}\nstages:\n  detector: {steps: 5, mask: 1, landmarks: 1}\n",
+                              "c.yaml");
+      },
+      {"c.yaml", "stages.detector.landmarks", "heatmaps and mask only"});
+  expect_error(
+      [] {
+        parse_training_config("network: {detector: {}}\nstages:\n  detector: {steps: 5, mask: 1}\n"
+                              "detector_augmentation: {backgrounds: /usr/share/backgrounds/mate/nature,\n"
+                              "  background_photos: [NoSuchPhoto.jpg]}\n",
+                              "c.yaml");
+      },
+      {"c.yaml", "detector_augmentation.background_photos", "NoSuchPhoto.jpg"});
+  expect_error([] { parse_training_config("detector_augmentation: {shift: 0.1}\n" + std::string(kStages), "c.yaml"); },
+               {"c.yaml", "detector_augmentation", "0 steps"});
 }
 
 TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {

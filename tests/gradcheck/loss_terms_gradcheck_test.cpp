@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "capture/deformation/losses.h"
+#include "capture/detection/detection_losses.h"
 #include "capture/studio/studio_rig.h"
 #include "capture/training/multiview_losses.h"
 #include "capture/training/simulation_loss.h"
@@ -166,6 +167,28 @@ WEFT_GRADCHECK_CASES(loss_terms) {
     c.function = [](const std::vector<Tensor>& in) { return capture::simulation_loss(in[0], in[1], 1e-3); };
     cases.push_back(c);
   }
+  {
+    GradcheckCase c;
+    c.op = "mul";
+    c.name = case_prefix("heatmaps") + " heatmaps [2,3,4,5] against targets, per-heatmap confidences";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 3, 4, 5}, -0.2, 1), uniform64(g, {2, 3, 4, 5}, 0, 1),
+                                 uniform64(g, {2, 3}, 0, 1)};
+    };
+    c.wrt = {0, 1};  // the confidences are the labels' (constants; they also normalise the sum)
+    c.function = [](const std::vector<Tensor>& in) { return capture::heatmap_loss(in[0], in[1], in[2]); };
+    cases.push_back(c);
+  }
+  {
+    GradcheckCase c;
+    c.op = "softplus";
+    c.name = case_prefix("mask") + " logits [2,1,4,4] against soft masks in [0, 1]";
+    c.make_inputs = [](Generator& g) {
+      return std::vector<Tensor>{uniform64(g, {2, 1, 4, 4}, -4, 4), uniform64(g, {2, 1, 4, 4}, 0, 1)};
+    };
+    c.function = [](const std::vector<Tensor>& in) { return capture::mask_loss(in[0], in[1]); };
+    cases.push_back(c);
+  }
   return cases;
 }
 
@@ -190,25 +213,32 @@ TEST(LossTermCoverage, EveryLossCaseNamesATermOfTheTable) {
   }
 }
 
-// Terms of PoseNet's lifting branch alone: weights of the pose stage only.
-bool pose_stage_only(const LossTerm& t) { return std::string(t.name) == "virtual_landmarks"; }
+// Terms that belong to one other stage: PoseNet's lifting branch alone (pose), the person
+// detector's (detector).
+const char* home_stage(const LossTerm& t) {
+  const std::string n = t.name;
+  if (n == "virtual_landmarks") return "pose";
+  if (n == "heatmaps" || n == "mask") return "detector";
+  return "physics";
+}
 
 TEST(LossTermCoverage, EveryTermIsAStageWeightOfTheConfig) {
   // A physics stage that sets every term's weight parses, and each key lands in its own
-  // field; a pose-stage-only term there is an error naming it.
+  // field; a term of another stage there is an error naming it, and parses in its stage.
   std::string yaml = "stages:\n  physics: {steps: 1, batch_size: 8";
   double value = 1;
   for (const LossTerm& t : loss_terms())
-    if (!pose_stage_only(t)) yaml += ", " + std::string(t.name) + ": " + std::to_string(value++);
+    if (std::string(home_stage(t)) == "physics") yaml += ", " + std::string(t.name) + ": " + std::to_string(value++);
   yaml += "}\n";
   const capture::TrainingConfig cfg = capture::parse_training_config(yaml, "loss_terms.yaml", ".");
   const capture::StageConfig& physics = cfg.stages.at(2);
   ASSERT_EQ(physics.kind, capture::StageKind::physics);
   value = 1;
   for (const LossTerm& t : loss_terms())
-    if (!pose_stage_only(t)) EXPECT_EQ(physics.weights.*t.weight, value++) << t.name;
+    if (std::string(home_stage(t)) == "physics") EXPECT_EQ(physics.weights.*t.weight, value++) << t.name;
   for (const LossTerm& t : loss_terms()) {
-    if (!pose_stage_only(t)) continue;
+    const std::string home = home_stage(t);
+    if (home == "physics") continue;
     const std::string bad = "stages:\n  physics: {steps: 1, batch_size: 8, " + std::string(t.name) + ": 1}\n";
     try {
       capture::parse_training_config(bad, "loss_terms.yaml", ".");
@@ -216,6 +246,11 @@ TEST(LossTermCoverage, EveryTermIsAStageWeightOfTheConfig) {
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(std::string("stages.physics.") + t.name), std::string::npos) << e.what();
     }
+    const std::string good = std::string(home == "detector" ? "network: {detector: {}}\n" : "") +
+                             "stages:\n  " + home + ": {steps: 1, batch_size: 8, " + t.name + ": 3}\n";
+    if (home == "pose") continue;  // virtual_landmarks needs a virtual_poses section (training_config_test)
+    const capture::TrainingConfig ok = capture::parse_training_config(good, "loss_terms.yaml", ".");
+    EXPECT_EQ(ok.stages.at(3).weights.*t.weight, 3) << t.name;
   }
 }
 

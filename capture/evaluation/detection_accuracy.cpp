@@ -1,0 +1,188 @@
+#include "capture/evaluation/detection_accuracy.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <numeric>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "capture/character/character.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/io/camera.h"
+#include "graph/error.h"
+
+namespace weft::capture {
+
+namespace fs = std::filesystem;
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The error of a predicted keypoint against a reference one (frame pixels).
+double keypoint_error(const Body25& pred, int m, double u, double v) {
+  return pred(m, 2) > 0 ? std::hypot(pred(m, 0) - u, pred(m, 1) - v) : kInf;
+}
+
+template <class F>
+std::vector<double> pooled(const std::array<std::vector<double>, kBody25Count>& per_joint, F keep) {
+  std::vector<double> out;
+  for (int m = 0; m < kBody25Count; ++m)
+    if (keep(m)) out.insert(out.end(), per_joint[m].begin(), per_joint[m].end());
+  return out;
+}
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+}  // namespace
+
+double mask_iou(const cv::Mat& a, const cv::Mat& b) {
+  WEFT_CHECK(a.size() == b.size() && a.type() == CV_8UC1 && b.type() == CV_8UC1,
+             "mask_iou: expected two 8-bit masks of one size");
+  cv::Mat both, either;
+  cv::bitwise_and(a != 0, b != 0, both);
+  cv::bitwise_or(a != 0, b != 0, either);
+  const int u = cv::countNonZero(either);
+  return u == 0 ? 1.0 : double(cv::countNonZero(both)) / u;
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  const size_t k = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  if (v.size() % 2) return v[k];
+  const double upper = v[k];
+  return 0.5 * (*std::max_element(v.begin(), v.begin() + k) + upper);
+}
+
+double fraction_within(const std::vector<double>& errors, const std::vector<double>& thresholds) {
+  WEFT_CHECK(errors.size() == thresholds.size(), "fraction_within: ", errors.size(), " errors, ", thresholds.size(),
+             " thresholds");
+  if (errors.empty()) return kNaN;
+  size_t n = 0;
+  for (size_t i = 0; i < errors.size(); ++i) n += errors[i] <= thresholds[i];
+  return double(n) / errors.size();
+}
+
+DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view) {
+  const DatasetInfo info = read_dataset_info(data);
+  WEFT_CHECK(std::find(info.views.begin(), info.views.end(), view) != info.views.end(), data, ": no view '", view,
+             "' (dataset.yaml views)");
+  const Character character = load_character(info.character);
+  const fs::path gt = fs::path(data) / "gt" / "pose.motion";
+  WEFT_CHECK(fs::exists(gt), gt.string(), ": missing (the true keypoints come from the dataset's ground-truth pose)");
+  const Motion motion = read_motion(gt.string(), int(character.rest_dofs.size()));
+  std::map<std::string, Camera> cameras;
+  for (Camera& c : read_cameras_yaml((fs::path(data) / "cameras.yaml").string())) cameras[c.name] = c;
+  std::vector<int> frames;
+  for (const auto& [name, ids] : info.splits) frames.insert(frames.end(), ids.begin(), ids.end());
+  std::sort(frames.begin(), frames.end());
+
+  DetectionAccuracy a;
+  a.data = data, a.view = view, a.detections = detections;
+  for (int f : frames) {
+    const std::string name = dataset_frame_name(f);
+    const fs::path mask_path = fs::path(detections) / "masks" / (name + ".png");
+    const fs::path kp_path = fs::path(detections) / "keypoints" / (name + "_keypoints.json");
+    WEFT_CHECK(fs::exists(mask_path), mask_path.string(), ": missing (frame ", f, " of ", data, ")");
+    const cv::Mat predicted_mask = cv::imread(mask_path.string(), cv::IMREAD_UNCHANGED);
+    WEFT_CHECK(predicted_mask.type() == CV_8UC1, mask_path.string(), ": expected an 8-bit one-channel mask");
+    const Body25 predicted = read_dataset_keypoints(kp_path.string());
+    const cv::Mat truth_mask = read_dataset_mask(info, f, view);
+    WEFT_CHECK(predicted_mask.size() == truth_mask.size(), mask_path.string(), ": ", predicted_mask.cols, "x",
+               predicted_mask.rows, ", the dataset's masks are ", truth_mask.cols, "x", truth_mask.rows);
+    a.frames.push_back(name);
+    a.iou.push_back(mask_iou(predicted_mask, truth_mask));
+    const double height = cv::boundingRect(truth_mask).height;
+    const double threshold = a.pck_fraction * height;
+
+    WEFT_CHECK(f < motion.num_frames(), gt.string(), ": ", motion.num_frames(), " frames, the dataset has frame ", f);
+    const Vertices body25 = pose_character(character, motion.dofs.row(f).transpose()).body25;
+    const auto cam = cameras.find(dataset_camera_name(info, f, view));
+    WEFT_CHECK(cam != cameras.end(), data, "/cameras.yaml: no camera '", dataset_camera_name(info, f, view), "'");
+    const Body25 labels = read_dataset_keypoints(dataset_keypoints_path(info, f, view));
+    for (int m = 0; m < kBody25Count; ++m) {
+      if (body25.row(m).allFinite()) {
+        const Eigen::Vector2d p = cam->second.project(body25.row(m).transpose());
+        a.truth_error_px[m].push_back(keypoint_error(predicted, m, p.x(), p.y()));
+        a.truth_threshold_px[m].push_back(threshold);
+      }
+      if (labels(m, 2) > 0) {
+        a.label_error_px[m].push_back(keypoint_error(predicted, m, labels(m, 0), labels(m, 1)));
+        a.label_threshold_px[m].push_back(threshold);
+      }
+    }
+  }
+  WEFT_CHECK(!a.frames.empty(), data, ": no frames in its splits");
+  return a;
+}
+
+std::string detection_accuracy_json(const DetectionAccuracy& a) {
+  nlohmann::json j;
+  j["format"] = "weft-detection-accuracy/1";
+  j["data"] = a.data;
+  j["view"] = a.view;
+  j["detections"] = a.detections;
+  j["frames"] = a.frames.size();
+  j["pck_fraction_of_height"] = a.pck_fraction;
+  j["mask_iou"] = {{"median", number(median_of(a.iou))},
+                   {"mean", number(std::accumulate(a.iou.begin(), a.iou.end(), 0.0) / a.iou.size())},
+                   {"min", number(*std::min_element(a.iou.begin(), a.iou.end()))},
+                   {"per_frame", a.iou}};
+  auto summary = [&](const std::array<std::vector<double>, kBody25Count>& e,
+                     const std::array<std::vector<double>, kBody25Count>& t) {
+    nlohmann::json s;
+    const auto all = pooled(e, [](int) { return true; });
+    const auto thr = pooled(t, [](int) { return true; });
+    size_t missed = 0;
+    for (double v : all) missed += !std::isfinite(v);
+    s["median_px"] = number(median_of(all));
+    s["pck"] = number(fraction_within(all, thr));
+    s["keypoints"] = all.size();
+    s["undetected"] = missed;
+    nlohmann::json per = nlohmann::json::object();
+    for (int m = 0; m < kBody25Count; ++m)
+      if (!e[m].empty())
+        per[kBody25Names[m]] = {{"median_px", number(median_of(e[m]))},
+                                {"pck", number(fraction_within(e[m], t[m]))},
+                                {"count", e[m].size()}};
+    s["per_keypoint"] = per;
+    return s;
+  };
+  j["against_truth"] = summary(a.truth_error_px, a.truth_threshold_px);
+  j["against_labels"] = summary(a.label_error_px, a.label_threshold_px);
+  return j.dump(1) + "\n";
+}
+
+std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a) {
+  std::vector<std::string> out;
+  const auto all_t = pooled(a.truth_error_px, [](int) { return true; });
+  const auto thr_t = pooled(a.truth_threshold_px, [](int) { return true; });
+  const auto all_l = pooled(a.label_error_px, [](int) { return true; });
+  const auto thr_l = pooled(a.label_threshold_px, [](int) { return true; });
+  out.push_back(fmt::format("{} frames of {} ({}): mask IoU median {:.4f} (min {:.4f})", a.frames.size(), a.data, a.view,
+                            median_of(a.iou), *std::min_element(a.iou.begin(), a.iou.end())));
+  out.push_back(fmt::format("keypoints against the truth: median {:.2f} px, PCK@{:.0f}% {:.1f} % ({} keypoints); "
+                            "against the dataset's detections: median {:.2f} px, PCK {:.1f} %",
+                            median_of(all_t), 100 * a.pck_fraction, 100 * fraction_within(all_t, thr_t), all_t.size(),
+                            median_of(all_l), 100 * fraction_within(all_l, thr_l)));
+  out.push_back("keypoint        truth median px  PCK %   labels median px  PCK %");
+  for (int m = 0; m < kBody25Count; ++m) {
+    if (a.truth_error_px[m].empty() && a.label_error_px[m].empty()) continue;
+    out.push_back(fmt::format("{:<14} {:>16.2f} {:>6.1f} {:>18.2f} {:>6.1f}", kBody25Names[m],
+                              median_of(a.truth_error_px[m]),
+                              100 * fraction_within(a.truth_error_px[m], a.truth_threshold_px[m]),
+                              median_of(a.label_error_px[m]),
+                              100 * fraction_within(a.label_error_px[m], a.label_threshold_px[m])));
+  }
+  return out;
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,47 @@
+#pragma once
+// How well predicted keypoints and masks (`weft detect`'s folder: keypoints/<name>_keypoints.json,
+// masks/<name>.png) match one view of a dataset: the mask IoU against the rendered masks,
+// and each BODY_25 keypoint's pixel error against the true keypoint (the character posed
+// by gt/pose.motion, projected by the frame's camera) and against the dataset's own
+// detections (the labels the detector was trained on). PCK counts a keypoint correct
+// within 5 % of the person's height (the true mask's box height in that frame).
+// A keypoint the prediction leaves undetected while the truth has it counts as wrong at
+// any threshold and as an infinite error (medians include it).
+#include <array>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "capture/io/openpose.h"
+
+namespace weft::capture {
+
+// The IoU of two masks (nonzero = person; one size); 1 when both are empty.
+double mask_iou(const cv::Mat& a, const cv::Mat& b);
+// The median of `values` (+inf counts; NaN for none).
+double median_of(std::vector<double> values);
+// The fraction of errors[i] ≤ thresholds[i] (NaN for none).
+double fraction_within(const std::vector<double>& errors, const std::vector<double>& thresholds);
+
+struct DetectionAccuracy {
+  std::string data, view, detections;
+  std::vector<std::string> frames;  // names
+  std::vector<double> iou;          // per frame
+  // Per keypoint (BODY_25 order), one entry per frame where the reference has it: the
+  // error in frame pixels and 5 % of the person's height there.
+  std::array<std::vector<double>, kBody25Count> truth_error_px, truth_threshold_px;
+  std::array<std::vector<double>, kBody25Count> label_error_px, label_threshold_px;
+  double pck_fraction = 0.05;
+};
+
+// Reads the predictions of `detections` for every frame of `view` in the dataset `data`
+// (all splits); errors name the missing file.
+DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view);
+
+// detection_accuracy.json: medians, PCK and counts over all keypoints and per keypoint.
+std::string detection_accuracy_json(const DetectionAccuracy& a);
+// Lines for the log: the overall figures, then a table per keypoint.
+std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a);
+
+}  // namespace weft::capture
