@@ -7,7 +7,7 @@
 //                        [automatic|simplicial|supernodal] [TOLERANCE] [project|exact]
 //                        [amd|nested_dissection|metis] [KEY=VALUE ...]
 // KEY=VALUE arguments (anywhere) set further Newton options: cg_max_iterations,
-// cg_relative_tolerance, start_from_prediction (0/1), start_filter_per_vertex (0/1),
+// cg_relative_tolerance, adaptive_cg_tolerance (0/1), start_from_prediction (0/1), start_filter_per_vertex (0/1),
 // start_following_body (0/1), secant_stiffness (0/1: the collision's secant stiffness along the
 // contact normal, off by default),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
@@ -136,6 +136,7 @@ int main(int argc_all, char** argv_all) {
   for (const auto& [key, value] : named) {
     if (key == "cg_max_iterations") s.newton.cg_max_iterations = std::atoi(value.c_str());
     else if (key == "cg_relative_tolerance") s.newton.cg_relative_tolerance = std::atof(value.c_str());
+    else if (key == "adaptive_cg_tolerance") s.newton.adaptive_cg_tolerance = value != "0";
     else if (key == "precondition_exact_hessian")
       s.newton.precondition_exact_hessian = value != "0";
     else if (key == "negative_curvature_search")

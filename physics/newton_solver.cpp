@@ -102,7 +102,7 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
   Eigen::VectorXd z = cholmod_->solve(r);
   Eigen::VectorXd p = z;
   double rz = r.dot(z);
-  const double target = options_.cg_relative_tolerance * b.norm();
+  const double target = (cg_forcing_ > 0 ? cg_forcing_ : options_.cg_relative_tolerance) * b.norm();
   for (int k = 0; k < options_.cg_max_iterations; ++k) {
     Eigen::VectorXd hp = H.multiply(p);
     hp += delta_ * p;
@@ -343,6 +343,8 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
   if (!std::isfinite(e) || !g.allFinite()) return finish(StepStatus::non_finite);
   report.accepted_energies.push_back(e);
   const bool trace_on = std::getenv("WEFT_NEWTON_TRACE") != nullptr;
+  cg_forcing_ = options_.cg_relative_tolerance;
+  const double phi = 0.5 * (1.0 + std::sqrt(5.0));
   for (int it = 0; it < options_.max_iterations; ++it) {
     report.residual_history.push_back(residual(g));
     report.residual_ms.push_back(ms_since(t_start));
@@ -413,11 +415,26 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
     }
     if (!accepted) return finish(StepStatus::line_search_failed);
     if (trace_on) print_trace(it, x, g, e, x_new, d, last_alpha, trace, report);
+    // The linear model's gradient after the step taken, before hessian_ moves on to x_new.
+    double model_gradient = 0;
+    if (options_.adaptive_cg_tolerance) {
+      const Eigen::VectorXd step = x_new - x;
+      model_gradient = (g + (exact_differs_ ? exact_hessian_ : hessian_).multiply(step)).norm();
+    }
     // Gradient and Hessian at the new iterate in one pass: the Hessian is wasted only on
     // the iterate that converges, and each iteration saves a pass (the energies share
     // their per-element work between both).
     const double e_new = evaluate(x_new, &g_new, &hessian_, &report.energy_ms);
     if (!std::isfinite(e_new) || !g_new.allFinite()) return finish(StepStatus::non_finite);
+    if (options_.adaptive_cg_tolerance) {
+      const double g_norm = g.norm();
+      double eta = g_norm > 0 ? std::abs(g_new.norm() - model_gradient) / g_norm : options_.cg_relative_tolerance;
+      const double previous = std::pow(cg_forcing_, phi);
+      if (previous > 0.1) eta = std::max(eta, previous);
+      cg_forcing_ = std::clamp(eta, options_.cg_min_relative_tolerance, options_.cg_relative_tolerance);
+      // A step that has used half its iterations gets exact directions from then on.
+      if (2 * (it + 1) >= options_.max_iterations) cg_forcing_ = options_.cg_min_relative_tolerance;
+    }
     x.swap(x_new);
     g.swap(g_new);
     e = e_new;
