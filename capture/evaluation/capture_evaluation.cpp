@@ -18,9 +18,11 @@
 
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
+#include "capture/io/openpose.h"
 #include "capture/evaluation/capture_folder.h"
 #include "capture/evaluation/frame_measures.h"
 #include "geometry/mesh_io.h"
+#include "capture/render/detection_drawing.h"
 #include "capture/render/renderer.h"
 #include "capture/model/capture_networks.h"
 #include "capture/render/silhouette_iou.h"
@@ -368,6 +370,24 @@ void summarize(const EvaluationInputs& in, const Pooled& pool, CaptureEvaluation
   e.amv_iou = means.mean("amv_iou"), e.rv_iou = means.mean("rv_iou"), e.sv_iou = means.mean("sv_iou");
 }
 
+// The model's detections the capture read, against the dataset's truth on the captured frames.
+void measure_detector_inputs(const EvaluationInputs& in, CaptureEvaluation& e) {
+  const CaptureFolder& cap = in.cap;
+  if (cap.detections.empty()) return;
+  if (cap.masks_from != "detector" || cap.keypoints_from != "detector") {
+    e.notes.push_back(fmt::format("the capture read its {} from the person detector, its {} from elsewhere: the "
+                                  "detector's inputs are not measured",
+                                  cap.masks_from == "detector" ? "masks" : "keypoints",
+                                  cap.masks_from == "detector" ? "keypoints" : "masks"));
+    return;
+  }
+  std::vector<int> ids;
+  for (const CapturedFrame& f : cap.frames) ids.push_back(f.id);
+  e.detections = measure_detections(cap.detections, in.info.dir, e.view, ids);
+  const std::vector<std::string> lines = detection_accuracy_lines(*e.detections);
+  for (size_t i = 0; i < 2 && i < lines.size(); ++i) spdlog::info("the detector's inputs: {}", lines[i]);
+}
+
 // Overlays of the worst and the median frame: by cloth error, else by the input view's IoU.
 void draw_overlays(const EvaluationInputs& in, CaptureEvaluation& e) {
   const Character& ch = in.character;
@@ -402,12 +422,24 @@ void draw_overlays(const EvaluationInputs& in, CaptureEvaluation& e) {
     cv::Mat right = draw_meshes(image, camera, ch, gt_body, e.has_cloth ? &gt_cloth : nullptr);
     caption(left, fmt::format("prediction, frame {}", f));
     caption(right, "ground truth");
+    std::vector<cv::Mat> panels{left, right};
+    if (e.detections) {  // the detector's mask and keypoints the capture read, on the left
+      const std::string name = dataset_frame_name(f);
+      const fs::path dir(in.cap.detections);
+      const std::string mask_path = (dir / "masks" / (name + ".png")).string();
+      const cv::Mat mask = cv::imread(mask_path, cv::IMREAD_GRAYSCALE);
+      WEFT_CHECK(mask.size() == image.size(), mask_path, ": missing, unreadable or not the frame's size");
+      cv::Mat inputs = draw_detection(image, read_dataset_keypoints((dir / "keypoints" / (name + "_keypoints.json")).string()),
+                                      mask);
+      caption(inputs, "the detector's mask and keypoints");
+      panels.insert(panels.begin(), inputs);
+    }
     EvaluationOverlay ov;
     ov.label = label;
     ov.id = f;
     ov.ranked_by = e.has_cloth ? fmt::format("cloth error {:.1f} mm", e.frames[k].measures.cloth_error_mean_mm)
                                : fmt::format("SVIoU {:.4f}", e.frames[k].measures.sv_iou);
-    cv::hconcat(left, right, ov.image);
+    cv::hconcat(panels, ov.image);
     e.overlays.push_back(std::move(ov));
   }
 }
@@ -437,6 +469,7 @@ CaptureEvaluation evaluate_capture(const EvaluationOptions& o, const std::functi
     const TrainingPoses training = read_training_poses(o.training_data, o.training_split, in.character);
     e.training_set = compare_with_training_set(training, pool.test_poses, in.character.metres_per_unit);
   }
+  measure_detector_inputs(in, e);
   draw_overlays(in, e);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return e;

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "capture/evaluation/frame_measures.h"
+#include "capture/evaluation/detection_accuracy.h"
 #include "capture/evaluation/training_set_comparison.h"
 
 namespace weft::capture {
@@ -119,6 +120,11 @@ struct CaptureEvaluation {
   // With options.training_data: the test poses against the training set and the baselines
   // (frames in the order of `frames`).
   std::optional<TrainingSetComparison> training_set;
+
+  // When the capture read the model's own detections (capture.json: masks and keypoints
+  // from the detector, kept in its detections/ folder): those inputs measured against the
+  // dataset over the captured frames (capture/evaluation/detection_accuracy.h).
+  std::optional<DetectionAccuracy> detections;
 
   // metrics.json: the options, the summary and per-frame arrays (null where not measured).
   std::string to_json() const;

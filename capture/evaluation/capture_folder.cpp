@@ -77,6 +77,15 @@ CaptureFolder read_capture_folder(const std::string& dir) {
   WEFT_CHECK(c.fps > 0, where, ": fps must be > 0, is ", c.fps);
   c.collisions_resolved =
       required(j, "collisions_resolved", json::value_t::boolean, where, "true or false").get<bool>();
+  // Optional (captures before the person detector have neither).
+  for (const char* key : {"masks_from", "keypoints_from", "detections"}) {
+    const auto it = j.find(key);
+    if (it == j.end()) continue;
+    WEFT_CHECK(it->is_string(), where, ": key '", key, "' is ", it->type_name(), ", expected a string");
+  }
+  c.masks_from = j.value("masks_from", std::string());
+  c.keypoints_from = j.value("keypoints_from", std::string());
+  c.detections = resolve(dir, j.value("detections", std::string()));
   const json& frames = required(j, "frames", json::value_t::array, where, "an array of frames");
   WEFT_CHECK(!frames.empty(), where, ": 'frames' is empty (expected at least one captured frame)");
   std::set<int> seen;

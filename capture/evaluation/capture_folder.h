@@ -4,7 +4,9 @@
 //   DIR/capture.json   format "weft-capture/1"; model, character (character.yaml), metres_per_unit,
 //                      input, camera, view, fps,
 //                      collisions_resolved, frames [{id, source, pivot [x,y,z], translation_from}],
-//                      timing (not read)
+//                      optional: masks_from, keypoints_from ("folder", "detector", "keying",
+//                      "none") and detections (a folder of the detector's keypoints/ and masks/,
+//                      relative to DIR; "" none); timing (not read)
 //   DIR/meshes/body_<id:04d>.ply, DIR/meshes/cloth_<id:04d>.ply   world coordinates, character
 //                      units, the template's topology (the .obj copies beside them are not read)
 //   DIR/pose.motion    Skeletool .motion, one row per entry of frames[] in that order: the
@@ -39,6 +41,8 @@ struct CaptureFolder {
   std::string input, camera, view;
   double fps = 30;
   bool collisions_resolved = false;
+  std::string masks_from, keypoints_from;  // "" in captures written before they were recorded
+  std::string detections;                  // the detector's keypoints/ and masks/ ("" : none)
   std::vector<CapturedFrame> frames;  // in capture order; ids distinct
 };
 

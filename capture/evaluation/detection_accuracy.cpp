@@ -71,7 +71,8 @@ double fraction_within(const std::vector<double>& errors, const std::vector<doub
   return double(n) / errors.size();
 }
 
-DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view) {
+DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view,
+                                     const std::vector<int>& only_frames) {
   const DatasetInfo info = read_dataset_info(data);
   WEFT_CHECK(std::find(info.views.begin(), info.views.end(), view) != info.views.end(), data, ": no view '", view,
              "' (dataset.yaml views)");
@@ -84,6 +85,12 @@ DetectionAccuracy measure_detections(const std::string& detections, const std::s
   std::vector<int> frames;
   for (const auto& [name, ids] : info.splits) frames.insert(frames.end(), ids.begin(), ids.end());
   std::sort(frames.begin(), frames.end());
+  if (!only_frames.empty()) {
+    for (int f : only_frames)
+      WEFT_CHECK(std::binary_search(frames.begin(), frames.end(), f), data, ": no frame ", f, " in its splits");
+    frames = only_frames;
+    std::sort(frames.begin(), frames.end());
+  }
 
   DetectionAccuracy a;
   a.data = data, a.view = view, a.detections = detections;
@@ -161,18 +168,31 @@ std::string detection_accuracy_json(const DetectionAccuracy& a) {
   return j.dump(1) + "\n";
 }
 
+DetectionFigures detection_figures(const DetectionAccuracy& a) {
+  const auto all = [](const std::array<std::vector<double>, kBody25Count>& per_joint) {
+    return pooled(per_joint, [](int) { return true; });
+  };
+  DetectionFigures d;
+  d.mask_iou_median = median_of(a.iou);
+  d.mask_iou_min = a.iou.empty() ? kNaN : *std::min_element(a.iou.begin(), a.iou.end());
+  const auto truth = all(a.truth_error_px), labels = all(a.label_error_px);
+  d.truth_median_px = median_of(truth);
+  d.truth_pck = fraction_within(truth, all(a.truth_threshold_px));
+  d.label_median_px = median_of(labels);
+  d.label_pck = fraction_within(labels, all(a.label_threshold_px));
+  d.truth_keypoints = truth.size();
+  return d;
+}
+
 std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a) {
   std::vector<std::string> out;
-  const auto all_t = pooled(a.truth_error_px, [](int) { return true; });
-  const auto thr_t = pooled(a.truth_threshold_px, [](int) { return true; });
-  const auto all_l = pooled(a.label_error_px, [](int) { return true; });
-  const auto thr_l = pooled(a.label_threshold_px, [](int) { return true; });
+  const DetectionFigures d = detection_figures(a);
   out.push_back(fmt::format("{} frames of {} ({}): mask IoU median {:.4f} (min {:.4f})", a.frames.size(), a.data, a.view,
-                            median_of(a.iou), *std::min_element(a.iou.begin(), a.iou.end())));
+                            d.mask_iou_median, d.mask_iou_min));
   out.push_back(fmt::format("keypoints against the truth: median {:.2f} px, PCK@{:.0f}% {:.1f} % ({} keypoints); "
                             "against the dataset's detections: median {:.2f} px, PCK {:.1f} %",
-                            median_of(all_t), 100 * a.pck_fraction, 100 * fraction_within(all_t, thr_t), all_t.size(),
-                            median_of(all_l), 100 * fraction_within(all_l, thr_l)));
+                            d.truth_median_px, 100 * a.pck_fraction, 100 * d.truth_pck, d.truth_keypoints,
+                            d.label_median_px, 100 * d.label_pck));
   out.push_back("keypoint        truth median px  PCK %   labels median px  PCK %");
   for (int m = 0; m < kBody25Count; ++m) {
     if (a.truth_error_px[m].empty() && a.label_error_px[m].empty()) continue;

@@ -36,8 +36,19 @@ struct DetectionAccuracy {
 };
 
 // Reads the predictions of `detections` for every frame of `view` in the dataset `data`
-// (all splits); errors name the missing file.
-DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view);
+// (all splits), or only for the frame ids `frames` when given (e.g. the frames a capture
+// has); errors name the missing file or a frame the dataset lacks.
+DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view,
+                                     const std::vector<int>& frames = {});
+
+// The headline figures, over all frames and keypoints (NaN where nothing was measured).
+struct DetectionFigures {
+  double mask_iou_median = 0, mask_iou_min = 0;
+  double truth_median_px = 0, truth_pck = 0;  // against the true keypoints
+  double label_median_px = 0, label_pck = 0;  // against the dataset's detections
+  size_t truth_keypoints = 0;
+};
+DetectionFigures detection_figures(const DetectionAccuracy& a);
 
 // detection_accuracy.json: medians, PCK and counts over all keypoints and per keypoint.
 std::string detection_accuracy_json(const DetectionAccuracy& a);

@@ -159,6 +159,7 @@ std::string CaptureEvaluation::to_json() const {
   for (const EvaluationOverlay& o : overlays)
     ov.push_back({{"label", o.label}, {"id", o.id}, {"ranked_by", o.ranked_by}, {"file", overlay_file(o)}});
   j["overlays"] = ov;
+  if (detections) j["detections"] = json::parse(detection_accuracy_json(*detections));
   if (training_set) {
     const TrainingSetComparison& t = *training_set;
     json& c = j["training_set"];
@@ -289,6 +290,25 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
   h += "</table>\n<p>Definitions: docs/EVALUATION.md. The ground-truth column measures the dataset's own meshes "
        "the same way: the floor the data allows.</p>\n";
 
+  if (e.detections) {
+    const DetectionFigures d = detection_figures(*e.detections);
+    h += "<h2>The capture's inputs: the person detector</h2>\n<p>The capture read the model's own keypoints and "
+         "masks (from the pixels alone: <code>" + html_escape(e.detections->detections) +
+         "</code>); measured here against the dataset on the captured frames (PCK: within " +
+         num(100 * e.detections->pck_fraction, 0) + " % of the person's height). The overlays below show them on the "
+         "left.</p>\n<table><tr><th>measure</th><th>value</th><th>unit</th></tr>\n";
+    const auto drow = [&](const std::string& name, const std::string& v, const std::string& unit) {
+      h += "<tr><td>" + name + "</td><td>" + v + "</td><td>" + unit + "</td></tr>\n";
+    };
+    drow("mask IoU against the true mask, median", num(d.mask_iou_median, 4), "");
+    drow("mask IoU, worst frame", num(d.mask_iou_min, 4), "");
+    drow(fmt::format("keypoint error against the true keypoints, median ({} keypoints)", d.truth_keypoints),
+         num(d.truth_median_px, 2), "px");
+    drow("keypoints within the PCK threshold of the truth", num(100 * d.truth_pck, 1), "%");
+    drow("keypoint error against the dataset's own detections, median", num(d.label_median_px, 2), "px");
+    h += "</table>\n";
+  }
+
   h += "<h2>Per frame</h2>\n";
   h += svg_line_plot("3D vertex error", "mm",
                      ids, {{"cloth mean", col([](const auto& f) { return f.measures.cloth_error_mean_mm; }), "#d62728"},
@@ -364,8 +384,11 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
                         {"nearest training pose (PA)", tcol(&TrainingSetFrame::nearest_pose_pa_mm), "#d62728"}});
   }
 
-  h += "<h2>Overlays</h2>\n<p>The input view with the prediction drawn on it (left; body blue, cloth orange, "
-       "outline white) beside the ground truth drawn the same way (right).</p>\n";
+  h += std::string("<h2>Overlays</h2>\n<p>") +
+       (e.detections ? "The detector's mask (orange outline) and keypoints (green, by BODY_25 index) that the capture "
+                       "read (left), the input view with the prediction drawn on it (middle"
+                     : "The input view with the prediction drawn on it (left") +
+       "; body blue, cloth orange, outline white) beside the ground truth drawn the same way (right).</p>\n";
   for (const EvaluationOverlay& o : e.overlays)
     h += "<h3>" + html_escape(o.label) + " frame " + std::to_string(o.id) + " (" + html_escape(o.ranked_by) +
          ")</h3>\n<img src=\"" + overlay_file(o) + "\" alt=\"" + html_escape(o.label) + " frame\">\n";

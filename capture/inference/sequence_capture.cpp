@@ -21,6 +21,7 @@
 #include "capture/inference/temporal_filter.h"
 #include "graph/atomic_file.h"
 #include "geometry/mesh_io.h"
+#include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
 #include "capture/motion/skeleton_bvh.h"
 #include "capture/render/renderer.h"
@@ -147,6 +148,20 @@ struct NetworkOutputs {
   std::vector<Eigen::VectorXd> pose_rows, deformation_rows;
 };
 
+// What the model's person detector gave a frame, kept so that the capture can be looked at
+// and repeated: OUT/detections/keypoints/<name>_keypoints.json (OpenPose) and
+// OUT/detections/masks/<name>.png, as `weft detect` writes them; only the inputs the
+// detector made (not those read from --keypoints or --masks).
+void write_detector_inputs(const fs::path& out, const SequenceInput& input, const SequenceFrame& f) {
+  if (input.keypoints_from() == InputSource::detector) {
+    OpenPoseFrame json;
+    if (f.has_detections) json.people.push_back(f.detections);
+    write_openpose_json((out / kDetectionsFolder / "keypoints" / (f.frame.name + "_keypoints.json")).string(), json);
+  }
+  if (input.masks_from() == InputSource::detector)
+    write_png_atomically((out / kDetectionsFolder / "masks" / (f.frame.name + ".png")).string(), f.mask);
+}
+
 // Pass 1: crops and both networks, batched.
 NetworkOutputs run_networks(const CaptureContext& c, const NetworkConfig& network, CaptureNetworks& nets,
                             const std::vector<double>& keypoint_mask, SequenceInput& input) {
@@ -172,7 +187,8 @@ NetworkOutputs run_networks(const CaptureContext& c, const NetworkConfig& networ
       r.box = cv::boundingRect(f.mask);
       r.detections = f.detections;
       for (int k = 0; k < kBody25Count; ++k) r.mapped_detections += r.detections(k, 2) > 0 && keypoint_mask[size_t(k)] > 0;
-      clock.t = Clock::now();
+      write_detector_inputs(c.out, input, f);
+      clock.lap("write");
       samples.push_back(prepare_sample(f.frame.bgr, f.mask, r.detections, r.camera, crop_options));
       frames.push_back(r);
       clock.lap("crop");
@@ -420,6 +436,8 @@ void write_capture_json(const CaptureContext& c, const ModelFolder& model, const
   j["keypoints"] = o.keypoints;
   j["masks_from"] = input_source_name(input.masks_from());
   j["keypoints_from"] = input_source_name(input.keypoints_from());
+  const bool detected = input.masks_from() == InputSource::detector || input.keypoints_from() == InputSource::detector;
+  j["detections"] = detected ? kDetectionsFolder : "";
   j["fps"] = fps;
   j["filter"] = {{"sigma_frames", c.cfg.filter_sigma_frames}, {"radius_frames", c.cfg.filter_radius_frames}};
   j["collisions_resolved"] = o.resolve_collisions;
@@ -453,6 +471,9 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   const fs::path out(o.out);
   fs::create_directories(out / "meshes");
   if (cfg.overlays) fs::create_directories(out / "overlays");
+  fs::remove_all(out / kDetectionsFolder);  // a previous capture's, possibly from other inputs
+  if (input.keypoints_from() == InputSource::detector) fs::create_directories(out / kDetectionsFolder / "keypoints");
+  if (input.masks_from() == InputSource::detector) fs::create_directories(out / kDetectionsFolder / "masks");
   const double fps = o.fps > 0 ? o.fps : input.source().fps() > 0 ? input.source().fps() : 30.0;
   spdlog::info("model {} ({} at {}², weights {}); character {}: {} body + {} cloth vertices", o.model,
                model.network.backbone, model.network.input_size, model.weights, character.name,

@@ -2,8 +2,10 @@
 // `weft infer`: a trained model (capture/model/model_folder.h) captures a single-camera
 // sequence, frame by frame, as the paper tests (../shared/DESIGN.md, "Testing"):
 //  1. frames from a video or an image folder (frame_source.h);
-//  2. the person's mask: a given mask folder, else green-screen keying (green_screen.h);
-//     the networks' crop follows the mask as in training (SyntheticDataset's crops);
+//  2. the person's mask and detections: given folders (--masks, --keypoints), else the
+//     model's person detector when it has one (from the pixels alone:
+//     capture/detection/person_detection.h), else green-screen keying (green_screen.h) and
+//     no detections; the networks' crop follows the mask as in training;
 //  3. PoseNet and PADefNet on each crop (batched), then the temporal Gaussian filter over
 //     5 frames on their outputs (temporal_filter.h);
 //  4. the global translation: DeepCap's least squares on the keypoint rays when an OpenPose
@@ -15,14 +17,19 @@
 //  6. written to OUT (docs/CAPTURE.md): meshes/body_<id>.ply|obj and cloth_<id>.ply|obj
 //     (the template's topology, character units), pose.motion (the character's dofs, the
 //     root chain solved so the skeleton stands where the capture put it: root_placement.h),
-//     pose.bvh, overlays/<id>.png, overlay.mp4, and capture.json, written last, which lists
-//     the frames (id, source, pivot, how the translation was found), the inputs and the
-//     time per part. Every file is written atomically.
+//     pose.bvh, overlays/<id>.png, overlay.mp4, detections/ (what the person detector
+//     gave: keypoints/<name>_keypoints.json and masks/<name>.png, as `weft detect` writes
+//     them), and capture.json, written last, which lists the frames (id, source, pivot, how
+//     the translation was found), the inputs and where each came from, and the time per
+//     part. Every file is written atomically.
 #include <functional>
 #include <map>
 #include <string>
 
 namespace weft::capture {
+
+// OUT's folder of the detector's keypoints and masks (capture.json "detections").
+inline constexpr const char* kDetectionsFolder = "detections";
 
 struct CaptureOptions {
   std::string model;        // a model folder (the --out of `weft train`)

@@ -3,10 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include <opencv2/imgproc.hpp>
-
 #include <chrono>
-#include <cmath>
 #include <filesystem>
 #include <vector>
 
@@ -15,6 +12,7 @@
 #include "capture/inference/frame_source.h"
 #include "capture/io/openpose.h"
 #include "capture/io/png_file.h"
+#include "capture/render/detection_drawing.h"
 #include "capture/model/capture_networks.h"
 #include "capture/model/model_folder.h"
 #include "graph/atomic_file.h"
@@ -24,22 +22,6 @@ namespace weft::capture {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-cv::Mat detection_overlay(const cv::Mat& frame, const Body25& keypoints, const cv::Mat& mask) {
-  WEFT_CHECK(frame.type() == CV_8UC3 && mask.type() == CV_8UC1 && frame.size() == mask.size(),
-             "detection_overlay: expected a BGR frame and its 8-bit mask");
-  cv::Mat out = frame.clone();
-  std::vector<std::vector<cv::Point>> outline;
-  cv::findContours(mask.clone(), outline, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
-  cv::drawContours(out, outline, -1, cv::Scalar(0, 140, 255), 1, cv::LINE_AA);
-  for (int m = 0; m < kBody25Count; ++m) {
-    if (!(keypoints(m, 2) > 0)) continue;
-    const cv::Point p(int(std::lround(keypoints(m, 0))), int(std::lround(keypoints(m, 1))));
-    cv::circle(out, p, 2, cv::Scalar(40, 220, 40), cv::FILLED, cv::LINE_AA);
-    cv::putText(out, std::to_string(m), p + cv::Point(3, -2), cv::FONT_HERSHEY_PLAIN, 0.6, cv::Scalar(255, 255, 255), 1);
-  }
-  return out;
-}
 
 DetectSummary detect_sequence(const DetectOptions& o, const std::function<void(int, int)>& progress) {
   const auto t0 = Clock::now();
@@ -81,7 +63,7 @@ DetectSummary detect_sequence(const DetectOptions& o, const std::function<void(i
       write_png_atomically((out / "masks" / (batch[i].name + ".png")).string(), d.mask);
       if (o.overlays)
         write_png_atomically((out / "overlays" / (batch[i].name + ".png")).string(),
-                             detection_overlay(batch[i].bgr, d.keypoints, d.mask));
+                             draw_detection(batch[i].bgr, d.keypoints, d.mask));
       int detected = 0;
       for (int m = 0; m < kBody25Count; ++m) detected += d.keypoints(m, 2) > 0;
       frames.push_back({{"id", batch[i].id}, {"name", batch[i].name}, {"person", d.found}, {"keypoints", detected},

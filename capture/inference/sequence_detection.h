@@ -26,13 +26,10 @@ struct DetectOptions {
   std::string out;
   int max_frames = -1;  // −1: all
   int batch_size = 8;   // frames per pass of the detector
-  // Also OUT/overlays/<name>.png: the frame with the mask's outline (orange) and the
-  // detected keypoints (green dots, labelled by BODY_25 index) drawn over it.
+  // Also OUT/overlays/<name>.png: the frame with the detection drawn over it
+  // (capture/render/detection_drawing.h).
   bool overlays = false;
 };
-
-// The frame (CV_8UC3) with a detection drawn over it, as OUT/overlays/ holds it.
-cv::Mat detection_overlay(const cv::Mat& frame, const Body25& keypoints, const cv::Mat& mask);
 
 struct DetectSummary {
   int frames = 0, found = 0;  // frames, and those where the coarse pass saw a person

@@ -12,8 +12,8 @@
 #include "capture/detection/keypoint_heatmaps.h"
 #include "capture/detection/person_detection.h"
 #include "capture/detection/person_detector.h"
-#include "capture/inference/sequence_detection.h"
 #include "capture/model/capture_networks.h"
+#include "capture/render/detection_drawing.h"
 #include "capture/render/photos.h"
 #include "capture/studio/scene_dressing.h"
 #include "capture/studio/synthetic_studio.h"
@@ -225,7 +225,7 @@ TEST(PersonDetection, TheOverlayDrawsTheMasksOutlineAndTheDetectedKeypoints) {
   Body25 k = Body25::Zero();
   k.row(1) << 20, 20, 0.9;  // Neck
   k.row(4) << 40, 5, 0.0;   // undetected: not drawn
-  const cv::Mat out = detection_overlay(frame, k, mask);
+  const cv::Mat out = draw_detection(frame, k, mask);
   ASSERT_EQ(out.size(), frame.size());
   const cv::Vec3b dot = out.at<cv::Vec3b>(20, 20), edge = out.at<cv::Vec3b>(8, 20), far = out.at<cv::Vec3b>(36, 45);
   EXPECT_GT(dot[1], 150);  // green (BGR)

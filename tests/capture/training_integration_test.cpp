@@ -18,6 +18,8 @@
 #include <sstream>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
 
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
@@ -31,6 +33,9 @@
 #include "capture/training/multiview_losses.h"
 #include "capture/training/trainer.h"
 #include "capture/evaluation/detection_accuracy.h"
+#include "capture/evaluation/capture_evaluation.h"
+#include "capture/evaluation/evaluation_report.h"
+#include "capture/inference/sequence_capture.h"
 #include "capture/inference/sequence_detection.h"
 #include "graph/autograd.h"
 #include "nn/checkpoint.h"
@@ -82,8 +87,9 @@ double mean_total(const std::vector<LossRow>& rows, size_t first, size_t count) 
 
 // Starts (or resumes) `weft train` on the tiny config; SIGKILLs it once losses.csv has a
 // row for `kill_at` (or later). Returns the last step it had logged (−1: it ended first).
-int64_t run_and_kill(const fs::path& run, int64_t kill_at, bool resume) {
-  const std::string bin = weft_binary(), config = repo_file("configs/train/tiny.yaml");
+int64_t run_and_kill(const fs::path& run, int64_t kill_at, bool resume,
+                     const std::string& config = repo_file("configs/train/tiny.yaml")) {
+  const std::string bin = weft_binary();
   const std::string data = tiny_data().string(), out = run.string();
   const pid_t pid = ::fork();
   if (pid == 0) {
@@ -616,6 +622,20 @@ TEST(Training, TheDetectorStageTrainsTheDetectorAndWeftDetectUsesIt) {
   }
   EXPECT_LT(mean_total(rows, 9, 3), mean_total(rows, 0, 3));
 
+  // Killed inside the detector stage (after its checkpoint at step 6) and resumed, the run
+  // logs the same losses as the uninterrupted one.
+  ASSERT_TRUE(fs::exists(weft_binary())) << weft_binary();
+  const fs::path killed = root / "killed";
+  fs::remove_all(killed);
+  const int64_t logged = run_and_kill(killed, 7, false, config.string());
+  ASSERT_GE(logged, 7) << "the run ended or stalled before step 7";
+  ASSERT_LT(logged, 12) << "killed after the stage ended";
+  TrainOptions resumed = o;
+  resumed.run = killed.string();
+  resumed.resume = true;
+  EXPECT_GT(train(resumed).first_step, 1) << "resumed from the start";
+  EXPECT_EQ(slurp(killed / "losses.csv"), slurp(root / "run" / "losses.csv"));
+
   // Only the detector learnt: PoseNet is as initialised with the same seed.
   const TrainingConfig cfg = load_training_config(config.string());
   const Character ch = load_character(read_dataset_info(tiny_data().string()).character);
@@ -640,4 +660,45 @@ TEST(Training, TheDetectorStageTrainsTheDetectorAndWeftDetectUsesIt) {
   const DetectionAccuracy a = measure_detections((root / "detect").string(), tiny_data().string(), "cam02");
   EXPECT_EQ(a.iou.size(), size_t(s.frames));
   for (double iou : a.iou) EXPECT_TRUE(iou >= 0 && iou <= 1) << iou;
+
+  // `weft infer` from the pixels alone keeps what the detector gave it (the same as `weft
+  // detect`'s), records it in capture.json, and `weft eval` measures those inputs and shows
+  // them beside the capture in the report's overlays.
+  CaptureOptions c;
+  c.model = d.model;
+  c.input = d.input;
+  c.camera = (tiny_data() / "cameras.yaml").string();
+  c.camera_name = "cam02";
+  c.out = (root / "capture").string();
+  capture_sequence(c);
+  const nlohmann::json cap = nlohmann::json::parse(std::ifstream(root / "capture" / "capture.json"));
+  EXPECT_EQ(cap["masks_from"], "detector");
+  EXPECT_EQ(cap["keypoints_from"], "detector");
+  EXPECT_EQ(cap["detections"], "detections");
+  for (const char* name : {"0000", "0005"}) {
+    const cv::Mat by_infer = cv::imread((root / "capture" / "detections" / "masks" / (name + std::string(".png"))).string(),
+                                        cv::IMREAD_GRAYSCALE);
+    const cv::Mat by_detect = cv::imread((root / "detect" / "masks" / (name + std::string(".png"))).string(),
+                                         cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(by_infer.empty()) << name;
+    EXPECT_EQ(cv::countNonZero(by_infer != by_detect), 0) << name;
+    const std::string kp = name + std::string("_keypoints.json");
+    EXPECT_EQ(read_openpose_json((root / "capture" / "detections" / "keypoints" / kp).string()).people.size(),
+              read_openpose_json((root / "detect" / "keypoints" / kp).string()).people.size());
+  }
+  EvaluationOptions eo;
+  eo.prediction = c.out;
+  eo.data = tiny_data().string();
+  const CaptureEvaluation ev = evaluate_capture(eo);
+  ASSERT_TRUE(ev.detections.has_value());
+  EXPECT_EQ(ev.detections->iou, a.iou);  // every frame captured: the same figures as `weft detect --truth`
+  write_evaluation_report(ev, (root / "report").string());
+  ASSERT_FALSE(ev.overlays.empty());
+  const int width = read_dataset_info(tiny_data().string()).image_width;
+  EXPECT_EQ(ev.overlays[0].image.cols, 3 * width) << "the detector's inputs, the prediction, the ground truth";
+  const nlohmann::json metrics = nlohmann::json::parse(std::ifstream(root / "report" / "metrics.json"));
+  EXPECT_TRUE(metrics["detections"]["mask_iou"]["median"].is_number());
+  std::ifstream html(root / "report" / "report.html");
+  const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
+  EXPECT_NE(page.find("the person detector"), std::string::npos);
 }
