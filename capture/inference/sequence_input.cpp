@@ -9,7 +9,6 @@
 
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/green_screen.h"
-#include "capture/dataset/synthetic_dataset.h"
 #include "graph/error.h"
 
 namespace weft::capture {
