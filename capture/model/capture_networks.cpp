@@ -101,7 +101,9 @@ CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig
 PersonDetector& CaptureNetworks::require_detector(const std::string& model) const {
   if (!detector)
     fail(model, ": this model has no person detector (no detector.* weights; its config has no network.detector), so "
-         "weft cannot find the person's keypoints and mask itself. Retrain with a network.detector section and "
+         "weft cannot find the person's keypoints and mask itself. Add one without retraining the rest (weft train "
+         "--init MODEL/model.safetensors with the same networks plus network.detector and only stages.detector, e.g. "
+         "configs/train/default_detector.yaml for a default.yaml model), retrain with a network.detector section and "
          "stages.detector.steps > 0 (configs/train/demo.yaml has one; docs/TRAINING.md, \"The person detector\"), or "
          "pass --keypoints and --masks");
   return *detector;

@@ -1,6 +1,5 @@
 #include "capture/model/model_folder.h"
 
-
 #include <algorithm>
 #include <cstdio>
 #include <system_error>
@@ -45,6 +44,23 @@ void load_capture_networks(const std::string& path, CaptureNetworks& nets) {
     nn::load_checkpoint(path, nets, nullptr, nullptr);
   else
     nn::load_weights(path, nets);
+}
+
+bool load_capture_networks_for_a_new_detector(const std::string& path, CaptureNetworks& nets) {
+  const nn::SafetensorsFile f = nn::load_safetensors(path);
+  const auto format = f.metadata.find("weft.format");
+  const bool checkpoint = format != f.metadata.end() && format->second == "training-checkpoint-1";
+  const bool has_detector = std::any_of(f.tensors.begin(), f.tensors.end(),
+                                        [](const auto& t) { return t.first.starts_with("detector."); });
+  if (!nets.detector || checkpoint || has_detector) {
+    load_capture_networks(path, nets);
+    return false;
+  }
+  nn::TensorMap state = f.tensors;  // the file's networks, the detector's own initialisation
+  for (const auto& [name, t] : nets.state_dict())
+    if (name.starts_with("detector.")) state.emplace(name, t.clone());
+  nets.load_state_dict(state, "weights '" + path + "'");
+  return true;
 }
 
 void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir) {

@@ -911,8 +911,11 @@ void Trainer::start_run(const fs::path& ckdir, RunState& st) {
     spdlog::info("{}: no checkpoint yet: starting from step 1", ckdir.string());
   }
   if (st.done == 0 && !options_.init_weights.empty()) {
-    load_capture_networks(options_.init_weights, nets_);
-    spdlog::info("starting from the weights of {}", options_.init_weights);
+    if (load_capture_networks_for_a_new_detector(options_.init_weights, nets_))
+      spdlog::info("starting from the weights of {}; it holds no person detector: the detector starts from its "
+                   "initialisation", options_.init_weights);
+    else
+      spdlog::info("starting from the weights of {}", options_.init_weights);
   }
 }
 

@@ -180,7 +180,7 @@ TEST(PersonDetector, AModelWithoutADetectorSaysWhatToRetrain) {
   CaptureNetworks without(ch, n, 0);
   EXPECT_EQ(without.detector, nullptr);
   expect_error([&] { without.require_detector("runs/old"); },
-               {"runs/old", "no person detector", "network.detector", "stages.detector.steps", "--keypoints", "--masks"});
+               {"runs/old", "no person detector", "network.detector", "stages.detector.steps", "--init", "default_detector.yaml", "--keypoints", "--masks"});
   n.detector.enabled = true;
   n.detector.input_size = 32;
   n.detector.width = 4;
@@ -204,7 +204,7 @@ TEST(PersonDetector, TheWildSequencesPhotosAreInNoTrainingShare) {
                         .string());
   ASSERT_FALSE(drawn.empty());
   int configs = 0;
-  for (const char* name : {"tiny", "default", "demo", "lifter", "paper"}) {
+  for (const char* name : {"tiny", "default", "demo", "lifter", "paper", "default_detector"}) {
     const TrainingConfig c = load_training_config(weft::capture::testing::repo_file(std::string("configs/train/") + name + ".yaml"));
     if (c.stages[3].steps == 0) continue;
     ++configs;
@@ -215,7 +215,7 @@ TEST(PersonDetector, TheWildSequencesPhotosAreInNoTrainingShare) {
           << name << ": " << photo << " is the wild sequence's background";
     EXPECT_LT(a.background_photos.size(), list_photos(a.backgrounds, "test").size()) << name << ": no test share";
   }
-  EXPECT_GE(configs, 1);  // demo.yaml trains one
+  EXPECT_GE(configs, 2);  // demo.yaml and default_detector.yaml train one
 }
 
 TEST(PersonDetection, TheOverlayDrawsTheMasksOutlineAndTheDetectedKeypoints) {

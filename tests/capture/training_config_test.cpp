@@ -35,6 +35,25 @@ TEST(TrainingConfig, ShippedConfigsParse) {
   EXPECT_GT(lifter.stages[0].weights.virtual_landmarks, 0);
 }
 
+// default_detector.yaml adds the person detector to a run of default.yaml (`weft train
+// --init RUN/model.safetensors`): its networks must be default.yaml's, plus the detector,
+// and it trains the detector alone.
+TEST(TrainingConfig, TheDetectorConfigFitsARunOfTheDefault) {
+  const TrainingConfig d = load_training_config(repo_file("configs/train/default.yaml"));
+  const TrainingConfig a = load_training_config(repo_file("configs/train/default_detector.yaml"));
+  EXPECT_EQ(a.network.backbone, d.network.backbone);
+  EXPECT_EQ(a.network.input_size, d.network.input_size);
+  EXPECT_EQ(a.network.margin, d.network.margin);
+  EXPECT_EQ(a.network.keypoint_input, d.network.keypoint_input);
+  EXPECT_EQ(a.network.image_input, d.network.image_input);
+  EXPECT_EQ(a.network.dof_scale, d.network.dof_scale);
+  EXPECT_EQ(a.network.angle_scale, d.network.angle_scale);
+  EXPECT_EQ(a.network.translation_scale_m, d.network.translation_scale_m);
+  EXPECT_FALSE(d.network.detector.enabled);
+  EXPECT_TRUE(a.network.detector.enabled);
+  for (const StageConfig& s : a.stages) EXPECT_EQ(s.steps > 0, s.kind == StageKind::detector) << stage_name(s.kind);
+}
+
 TEST(TrainingConfig, TheGarmentsArapFollowsTheBodysUnlessGiven) {
   const TrainingConfig c = parse_training_config(
       "stages:\n  warmup: {steps: 2, arap: 3}\n  physics: {steps: 2, arap: 3, cloth_arap: 0.5, simulation: 1}\n",

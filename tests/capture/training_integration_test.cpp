@@ -647,6 +647,26 @@ TEST(Training, TheDetectorStageTrainsTheDetectorAndWeftDetectUsesIt) {
   EXPECT_TRUE(identical(trained.pose_net->fc->weight, fresh.pose_net->fc->weight));
   EXPECT_FALSE(identical(trained.detector->named_parameters()[0].tensor, fresh.detector->named_parameters()[0].tensor));
 
+  // Added to a trained model without a detector (--init of a tiny.yaml run, the same networks
+  // but the detector): PoseNet and PADefNet stay that model's, the detector learns.
+  TrainOptions added = o;
+  added.run = (root / "added").string();
+  added.init_weights = (fixture().reference / "model.safetensors").string();
+  train(added);
+  const TrainingConfig tiny = load_training_config(repo_file("configs/train/tiny.yaml"));
+  CaptureNetworks base(ch, tiny.network, tiny.seed), with_detector(ch, cfg.network, cfg.seed);
+  weft::nn::load_weights(added.init_weights, base);
+  weft::nn::load_weights((root / "added" / "model.safetensors").string(), with_detector);
+  EXPECT_TRUE(identical(with_detector.pose_net->fc->weight, base.pose_net->fc->weight));
+  EXPECT_FALSE(identical(with_detector.pose_net->fc->weight, fresh.pose_net->fc->weight));
+  const auto base_deformation = base.deformation_net->named_parameters();
+  const auto added_deformation = with_detector.deformation_net->named_parameters();
+  ASSERT_EQ(base_deformation.size(), added_deformation.size());
+  for (size_t k = 0; k < base_deformation.size(); ++k)
+    EXPECT_TRUE(identical(added_deformation[k].tensor, base_deformation[k].tensor)) << added_deformation[k].name;
+  EXPECT_FALSE(identical(with_detector.detector->named_parameters()[0].tensor,
+                         fresh.detector->named_parameters()[0].tensor));
+
   DetectOptions d;
   d.model = (root / "run").string();
   d.input = (tiny_data() / "images" / "cam02").string();
