@@ -383,7 +383,13 @@ void measure_detector_inputs(const EvaluationInputs& in, CaptureEvaluation& e) {
   }
   std::vector<int> ids;
   for (const CapturedFrame& f : cap.frames) ids.push_back(f.id);
-  e.detections = measure_detections(cap.detections, in.info.dir, e.view, ids);
+  try {
+    e.detections = measure_detections(cap.detections, in.info.dir, e.view, ids);
+  } catch (const Error& error) {  // e.g. frames named otherwise than the dataset's: the rest still counts
+    e.notes.push_back(fmt::format("the detector's inputs are not measured: {}", error.what()));
+    spdlog::warn("{}", e.notes.back());
+    return;
+  }
   const std::vector<std::string> lines = detection_accuracy_lines(*e.detections);
   for (size_t i = 0; i < 2 && i < lines.size(); ++i) spdlog::info("the detector's inputs: {}", lines[i]);
 }

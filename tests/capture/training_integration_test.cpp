@@ -721,4 +721,11 @@ TEST(Training, TheDetectorStageTrainsTheDetectorAndWeftDetectUsesIt) {
   std::ifstream html(root / "report" / "report.html");
   const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
   EXPECT_NE(page.find("the person detector"), std::string::npos);
+  // A detections folder that misses a frame leaves the rest of the evaluation standing.
+  fs::remove(root / "capture" / "detections" / "masks" / "0003.png");
+  const CaptureEvaluation without = evaluate_capture(eo);
+  EXPECT_FALSE(without.detections.has_value());
+  ASSERT_FALSE(without.notes.empty());
+  EXPECT_NE(without.notes.back().find("0003.png"), std::string::npos) << without.notes.back();
+  EXPECT_TRUE(std::isfinite(without.sv_iou));
 }
