@@ -5,7 +5,6 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <mutex>
 #include <cmath>
@@ -658,7 +657,7 @@ void render_dataset(const SynthConfig& cfg, const Character& ch, const PosedMoti
   const std::vector<std::string>& views = cs.views;
   double render_seconds = 0, write_seconds = 0;
   std::mutex time_mutex;
-  std::atomic<int> rendered{0};
+  int rendered = 0;  // under time_mutex
   const RenderLooks looks = render_looks(cfg, ch, pm, cs);
   const auto t_render = Clock::now();
   tbb::parallel_for(0, frames * num_views, [&](int job) {
@@ -680,13 +679,12 @@ void render_dataset(const SynthConfig& cfg, const Character& ch, const PosedMoti
     op.people.push_back(kp);
     write_openpose_json(frame_file(out / "keypoints", views[v], f, "_keypoints.json"), op);
     const auto c = Clock::now();
-    {
-      std::lock_guard<std::mutex> lock(time_mutex);
-      render_seconds += std::chrono::duration<double>(b - a).count();
-      write_seconds += std::chrono::duration<double>(c - b).count();
-    }
-    const int n = ++rendered;
-    if (progress) progress({"rendering", n, frames * num_views});
+    // One lock for the times and the progress: the callback is never entered from two
+    // threads at once (a caller's progress bar or map need not be thread-safe).
+    std::lock_guard<std::mutex> lock(time_mutex);
+    render_seconds += std::chrono::duration<double>(b - a).count();
+    write_seconds += std::chrono::duration<double>(c - b).count();
+    if (progress) progress({"rendering", ++rendered, frames * num_views});
   });
   const double render_wall = seconds_since(t_render);
   // Split the wall time of the parallel loop by the CPU-time shares of its two halves.

@@ -122,7 +122,8 @@ struct SynthProgress {
 };
 
 // Writes the dataset into out_dir (created if missing; existing dataset files are
-// replaced). `progress` is called as stages advance. With several clips, dataset.yaml
+// replaced). `progress` is called as stages advance, from one thread at a time (the
+// rendering's parallel loop calls it under a lock), with `done` rising within a stage. With several clips, dataset.yaml
 // lists their first frames (`segments`) and every split takes its fraction from the end of
 // each clip; one clip gives the files a single-clip config always gave.
 SynthSummary synthesize_dataset(const SynthConfig& config, const std::string& out_dir,

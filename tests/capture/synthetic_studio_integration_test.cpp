@@ -10,11 +10,15 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "capture/io/camera.h"
 #include "capture/character/character.h"
@@ -474,5 +478,36 @@ TEST(SyntheticStudio, InPlaceTakesAwayTheRootsHorizontalPath) {
   for (int d = 0; d < skeleton.num_dofs(); ++d) {
     if (d == tx || d == tz) continue;
     EXPECT_LT(largest(change, d), 1e-12) << skeleton.dofs[d].name;
+  }
+}
+
+// `weft synth` crashed (a std::map insert racing in its progress bars) when the rendering's
+// parallel loop reported progress from two threads at once. The callback is entered by one
+// thread at a time, each stage counts up to its total, and nothing is reported twice.
+TEST(SyntheticStudio, ProgressIsReportedFromOneThreadAtATime) {
+  REQUIRE_HUMAN();
+  weft::capture::testing::ScratchDir scratch("progress");
+  const std::string clip = "  - procedural: " + repo_file("configs/motions/walk_in_place.yaml") +
+                           "\n    mapping: " + repo_file("configs/retarget/humanoid_to_makehuman.yaml") +
+                           "\n    start: 1.5\n    frames: 8\n";
+  std::atomic<int> inside{0}, most{0};
+  std::map<std::string, std::vector<int>> done;  // deliberately not thread-safe, like the app's bars
+  std::map<std::string, int> total;
+  synthesize_dataset(parse_synth_config(clips_config(clip, "{enabled: false}"), "progress.yaml"),
+                     scratch.file("out"), [&](const SynthProgress& p) {
+                       const int now = ++inside;
+                       most = std::max(most.load(), now);
+                       std::this_thread::sleep_for(std::chrono::milliseconds(2));  // widen any overlap
+                       done[p.stage].push_back(p.done);
+                       total[p.stage] = p.total;
+                       --inside;
+                     });
+  EXPECT_EQ(most.load(), 1);
+  ASSERT_EQ(done.count("rendering"), 1u);
+  EXPECT_EQ(total["rendering"], 16);  // 8 frames × 2 views
+  for (const auto& [stage, counts] : done) {
+    ASSERT_FALSE(counts.empty()) << stage;
+    for (size_t i = 1; i < counts.size(); ++i) EXPECT_GT(counts[i], counts[i - 1]) << stage << " report " << i;
+    EXPECT_EQ(counts.back(), total[stage]) << stage;
   }
 }
