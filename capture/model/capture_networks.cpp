@@ -85,12 +85,12 @@ CaptureNetworks::CaptureNetworks(const Character& character, const NetworkConfig
   image_input_ = config.image_input;
   if (config.keypoint_input) {
     Generator gen(seed + 2);
-    constexpr int64_t hidden = 512;
+    const int64_t hidden = config.lift_width;
     pose_lift = std::make_shared<nn::Sequential>();
-    pose_lift->push_back(std::make_shared<nn::Linear>(kLiftInputs, hidden, gen));
-    pose_lift->push_back(std::make_shared<nn::ReLU>());
-    pose_lift->push_back(std::make_shared<nn::Linear>(hidden, hidden, gen));
-    pose_lift->push_back(std::make_shared<nn::ReLU>());
+    for (int layer = 0; layer < config.lift_layers; ++layer) {
+      pose_lift->push_back(std::make_shared<nn::Linear>(layer == 0 ? kLiftInputs : hidden, hidden, gen));
+      pose_lift->push_back(std::make_shared<nn::ReLU>());
+    }
     // Zero last layer: the branch starts as no change to PoseNet's output.
     pose_lift->push_back(std::make_shared<nn::Linear>(hidden, pose_outputs_, gen, true, DType::F32, false));
     register_module("pose_lift", pose_lift);

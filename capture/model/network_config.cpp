@@ -8,7 +8,9 @@ void parse_network_config(const StrictYaml& y, const YAML::Node& n, NetworkConfi
              {"dof_scale", &c.dof_scale, 1e-6, 100},
              {"angle_scale", &c.angle_scale, 1e-6, 100},
              {"translation_scale_m", &c.translation_scale_m, 1e-6, 100}},
-            {{"input_size", &c.input_size, 32, 1024}}, {"backbone", "keypoint_input", "image_input", "detector"});
+            {{"input_size", &c.input_size, 32, 1024}, {"lift_width", &c.lift_width, 16, 4096},
+             {"lift_layers", &c.lift_layers, 1, 8}},
+            {"backbone", "keypoint_input", "image_input", "detector"});
   if (n["keypoint_input"])
     c.keypoint_input = y.get<bool>(n["keypoint_input"], "network.keypoint_input", "true or false");
   if (n["image_input"]) c.image_input = y.get<bool>(n["image_input"], "network.image_input", "true or false");

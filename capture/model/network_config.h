@@ -23,6 +23,10 @@ struct NetworkConfig {
   // false: PoseNet is the lifting branch alone (needs keypoint_input), the image network
   // does not run: a lifting network from the detections, as the field's 2D-to-3D lifters.
   bool image_input = true;
+  // The lifting branch's shape: lift_layers hidden layers of lift_width units, each a
+  // linear map and a ReLU, then a linear map to PoseNet's outputs (zero at the start).
+  int lift_width = 512;
+  int lift_layers = 2;
   // The person detector (capture/detection/person_detector.h): present with a
   // `network.detector` section, trained by stages.detector; what lets weft find the
   // person's keypoints and mask itself.

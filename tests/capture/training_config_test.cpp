@@ -155,6 +155,13 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   EXPECT_TRUE(parse_training_config(std::string(kStages) + "network: {keypoint_input: true}\n", "c.yaml")
                   .network.keypoint_input);
   EXPECT_FALSE(parse_training_config(std::string(kStages), "c.yaml").network.keypoint_input);
+  const TrainingConfig lift = parse_training_config(
+      std::string(kStages) + "network: {keypoint_input: true, lift_width: 1024, lift_layers: 3}\n", "c.yaml");
+  EXPECT_EQ(lift.network.lift_width, 1024);
+  EXPECT_EQ(lift.network.lift_layers, 3);
+  EXPECT_EQ(parse_training_config(std::string(kStages), "c.yaml").network.lift_width, 512);
+  expect_error([] { parse_training_config(std::string(kStages) + "network: {lift_layers: 0}\n", "c.yaml"); },
+               {"c.yaml:3", "network.lift_layers"});
   expect_error([] { parse_training_config(std::string(kStages) + "network: {keypoint_input: maybe}\n", "c.yaml"); },
                {"c.yaml:3", "network.keypoint_input", "true or false"});
   // The garment's simulation comes from the dataset (dataset.yaml), not from a recipe's path.

@@ -590,6 +590,27 @@ TEST(CaptureNetworks, TheKeypointBranchReadsTheDetectionsLearnsAndIsSaved) {
   for (int64_t i = 0; i < learnt.numel(); ++i)
     moved = std::max(moved, double(std::abs(learnt.data<float>()[i] - without.data<float>()[i])));
   EXPECT_GT(moved, 1e-4);
+
+  // network.lift_width and lift_layers shape the branch: 4 hidden layers of 32 units.
+  NetworkConfig narrow = config;
+  narrow.lift_width = 32;
+  narrow.lift_layers = 4;
+  CaptureNetworks deep(ch, narrow, 7);
+  std::vector<weft::Shape> shapes;
+  for (const auto& p : deep.pose_parameters())
+    if (p.name.rfind("pose_lift.", 0) == 0) shapes.push_back(p.tensor.shape());
+  ASSERT_EQ(shapes.size(), 10u) << "five linear layers' weights and biases";
+  int64_t inputs = kLiftInputs;
+  for (size_t i = 0; i < shapes.size(); i += 2) {
+    const int64_t outputs = i + 2 < shapes.size() ? 32 : deep.pose_outputs();
+    const weft::Shape& w = shapes[i];
+    ASSERT_EQ(w.size(), 2u);
+    EXPECT_EQ(w[0] * w[1], inputs * outputs) << "layer " << i / 2;
+    EXPECT_TRUE(w[0] == outputs || w[1] == outputs) << "layer " << i / 2;
+    inputs = outputs;
+  }
+  // A model saved with the default branch does not load into the deep one: the error says so.
+  EXPECT_THROW(weft::nn::load_weights(file.string(), deep), std::exception);
 }
 
 // The detector stage (network.detector, stages.detector) trains the person detector alone on
