@@ -76,6 +76,19 @@ void save_checkpoint(const std::string& path, const Module& model, const Optimiz
   save_safetensors(path, tensors, meta);
 }
 
+bool is_training_checkpoint(const SafetensorsFile& file) {
+  const auto format = file.metadata.find("weft.format");
+  return format != file.metadata.end() && format->second == kFormat;
+}
+
+TensorMap model_tensors(const SafetensorsFile& file) {
+  if (!is_training_checkpoint(file)) return file.tensors;
+  TensorMap model;
+  for (const auto& [name, t] : file.tensors)
+    if (name.starts_with(kModelPrefix)) model.emplace(name.substr(kModelPrefix.size()), t);
+  return model;
+}
+
 TrainingCheckpoint load_checkpoint(const std::string& path, Module& model, Optimizer* optimizer,
                                    Generator* gen) {
   const SafetensorsFile file = load_safetensors(path);

@@ -40,4 +40,10 @@ void save_checkpoint(const std::string& path, const Module& model, const Optimiz
 TrainingCheckpoint load_checkpoint(const std::string& path, Module& model, Optimizer* optimizer,
                                    Generator* gen);
 
+// The file is a training checkpoint (weft.format "training-checkpoint-1"), not bare weights.
+bool is_training_checkpoint(const SafetensorsFile& file);
+// The model's tensors of a file read with load_safetensors: a checkpoint's "model.*"
+// entries without the prefix (its optimiser state left out), or a weights file's tensors.
+TensorMap model_tensors(const SafetensorsFile& file);
+
 }  // namespace weft::nn

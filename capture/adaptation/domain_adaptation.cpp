@@ -31,14 +31,16 @@ int write_sequence_dataset(const AdaptOptions& o, const ModelFolder& model, cons
   const fs::path staging = dir.string() + ".partial";
   fs::remove_all(staging);
   // Without --masks or --keypoints the model's person detector finds them, when it has one.
+  SequenceInputOptions in{o.input, o.camera, o.camera_name, o.masks, o.keypoints, keying};
   std::unique_ptr<Character> character;
   std::unique_ptr<CaptureNetworks> nets;
-  if ((o.masks.empty() || o.keypoints.empty()) && model.network.detector.enabled) {
+  if (in.wants_detector() && model.network.detector.enabled) {
     character = std::make_unique<Character>(load_character(model.character));
     nets = std::make_unique<CaptureNetworks>(*character, model.network, model.seed);
     load_capture_networks(model.weights, *nets);
+    in.detector = nets->detector.get();
   }
-  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, keying, nets ? nets->detector.get() : nullptr});
+  SequenceInput input(in);
   spdlog::info("{}", input.describe());
   const std::string view = input.cameras().name();
   for (const char* sub : {"images", "masks", "keypoints"}) fs::create_directories(staging / sub / view);

@@ -390,8 +390,7 @@ void measure_detector_inputs(const EvaluationInputs& in, CaptureEvaluation& e) {
     spdlog::warn("{}", e.notes.back());
     return;
   }
-  const std::vector<std::string> lines = detection_accuracy_lines(*e.detections);
-  for (size_t i = 0; i < 2 && i < lines.size(); ++i) spdlog::info("the detector's inputs: {}", lines[i]);
+  for (const std::string& line : detection_summary_lines(*e.detections)) spdlog::info("the detector's inputs: {}", line);
 }
 
 // Overlays of the worst and the median frame: by cloth error, else by the input view's IoU.

@@ -184,7 +184,7 @@ DetectionFigures detection_figures(const DetectionAccuracy& a) {
   return d;
 }
 
-std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a) {
+std::vector<std::string> detection_summary_lines(const DetectionAccuracy& a) {
   std::vector<std::string> out;
   const DetectionFigures d = detection_figures(a);
   out.push_back(fmt::format("{} frames of {} ({}): mask IoU median {:.4f} (min {:.4f})", a.frames.size(), a.data, a.view,
@@ -193,6 +193,11 @@ std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a) {
                             "against the dataset's detections: median {:.2f} px, PCK {:.1f} %",
                             d.truth_median_px, 100 * a.pck_fraction, 100 * d.truth_pck, d.truth_keypoints,
                             d.label_median_px, 100 * d.label_pck));
+  return out;
+}
+
+std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a) {
+  std::vector<std::string> out = detection_summary_lines(a);
   out.push_back("keypoint        truth median px  PCK %   labels median px  PCK %");
   for (int m = 0; m < kBody25Count; ++m) {
     if (a.truth_error_px[m].empty() && a.label_error_px[m].empty()) continue;

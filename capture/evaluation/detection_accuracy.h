@@ -52,7 +52,9 @@ DetectionFigures detection_figures(const DetectionAccuracy& a);
 
 // detection_accuracy.json: medians, PCK and counts over all keypoints and per keypoint.
 std::string detection_accuracy_json(const DetectionAccuracy& a);
-// Lines for the log: the overall figures, then a table per keypoint.
+// Lines for the log: the overall figures (mask IoU; keypoint medians and PCK)...
+std::vector<std::string> detection_summary_lines(const DetectionAccuracy& a);
+// ...and those followed by a table per keypoint.
 std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a);
 
 }  // namespace weft::capture

@@ -465,8 +465,9 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   nets.deformation_net->train(false);
   const CaptureModel capture_model(character, model.network);
   // Without --masks or --keypoints the model's person detector finds them, when it has one.
-  PersonDetector* detector = o.masks.empty() || o.keypoints.empty() ? nets.detector.get() : nullptr;
-  SequenceInput input({o.input, o.camera, o.camera_name, o.masks, o.keypoints, cfg.keying, detector});
+  SequenceInputOptions in{o.input, o.camera, o.camera_name, o.masks, o.keypoints, cfg.keying};
+  if (in.wants_detector()) in.detector = nets.detector.get();
+  SequenceInput input(in);
   WEFT_CHECK(!o.out.empty(), "weft infer: no output folder");
   const fs::path out(o.out);
   fs::create_directories(out / "meshes");

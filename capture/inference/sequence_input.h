@@ -44,6 +44,8 @@ struct SequenceInputOptions {
   KeyingConfig keying;
   // The model's person detector (null: none): masks and detections where no folder gives them.
   PersonDetector* detector = nullptr;
+  // A folder is missing for the masks or the detections: the model's detector would fill it.
+  bool wants_detector() const { return masks.empty() || keypoints.empty(); }
 };
 
 // Where a frame's mask and detections came from (capture.json's masks_from, keypoints_from).

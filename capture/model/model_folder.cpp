@@ -38,29 +38,19 @@ std::vector<std::pair<int64_t, fs::path>> list_checkpoints(const fs::path& dir) 
 }
 
 void load_capture_networks(const std::string& path, CaptureNetworks& nets) {
-  const nn::SafetensorsFile f = nn::load_safetensors(path);
-  const auto it = f.metadata.find("weft.format");
-  if (it != f.metadata.end() && it->second == "training-checkpoint-1")
-    nn::load_checkpoint(path, nets, nullptr, nullptr);
-  else
-    nn::load_weights(path, nets);
+  nets.load_state_dict(nn::model_tensors(nn::load_safetensors(path)), "weights '" + path + "'");
 }
 
 bool load_capture_networks_for_a_new_detector(const std::string& path, CaptureNetworks& nets) {
-  const nn::SafetensorsFile f = nn::load_safetensors(path);
-  const auto format = f.metadata.find("weft.format");
-  const bool checkpoint = format != f.metadata.end() && format->second == "training-checkpoint-1";
-  const bool has_detector = std::any_of(f.tensors.begin(), f.tensors.end(),
-                                        [](const auto& t) { return t.first.starts_with("detector."); });
-  if (!nets.detector || checkpoint || has_detector) {
-    load_capture_networks(path, nets);
-    return false;
-  }
-  nn::TensorMap state = f.tensors;  // the file's networks, the detector's own initialisation
-  for (const auto& [name, t] : nets.state_dict())
-    if (name.starts_with("detector.")) state.emplace(name, t.clone());
+  nn::TensorMap state = nn::model_tensors(nn::load_safetensors(path));
+  const bool add = nets.detector && std::none_of(state.begin(), state.end(), [](const auto& t) {
+                     return t.first.starts_with("detector.");
+                   });
+  if (add)  // the file's networks, the detector's own initialisation
+    for (const auto& [name, t] : nets.state_dict())
+      if (name.starts_with("detector.")) state.emplace(name, t.clone());
   nets.load_state_dict(state, "weights '" + path + "'");
-  return true;
+  return add;
 }
 
 void write_model_folder(const std::string& run, const std::string& config_path, const std::string& data_dir) {

@@ -55,11 +55,11 @@ void write_model_folder(const std::string& run, const std::string& config_path, 
 // the optimiser's state: left out).
 void load_capture_networks(const std::string& weights, CaptureNetworks& networks);
 
-// The same for a run's starting weights (`weft train --init`): a weights file that holds no
-// `detector.*` tensor while the networks have a detector (network.detector) loads the other
-// networks and leaves the detector as initialised, so a detector stage can add the person
-// detector to a model trained without one; returns whether it did. Otherwise (a detector
-// in the file, a training checkpoint, no detector in the networks) as load_capture_networks.
+// The same for a run's starting weights (`weft train --init`): weights or a checkpoint that
+// hold no `detector.*` tensor while the networks have a detector (network.detector) load the
+// other networks and leave the detector as initialised, so a detector stage can add the
+// person detector to a model trained without one; returns whether it did. Otherwise (a
+// detector in the file, no detector in the networks) as load_capture_networks.
 bool load_capture_networks_for_a_new_detector(const std::string& weights, CaptureNetworks& networks);
 
 // The checkpoints of RUN/checkpoints (step_NNNNNNN.safetensors), oldest first.

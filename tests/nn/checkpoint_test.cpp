@@ -104,6 +104,30 @@ TEST_F(CheckpointTest, WeightsRoundTripUnderTheirModuleNames) {
     EXPECT_TRUE(same_bits(t, other->state_dict().at(name))) << name;
 }
 
+// A reader of either kind of file (e.g. `weft infer --weights` on a checkpoint) gets the
+// model's tensors under their module names, the optimiser's state left out.
+TEST_F(CheckpointTest, ModelTensorsOfACheckpointAndOfWeightsAreTheModelsStateDict) {
+  auto net = small_net(6);
+  AdamW opt(net->named_parameters(), AdamWOptions{});
+  Generator gen(3);
+  train_step(*net, opt, gen);
+  save_checkpoint(path("ckpt.safetensors"), *net, &opt, 1, &gen);
+  save_weights(path("w.safetensors"), *net);
+  const SafetensorsFile ckpt = load_safetensors(path("ckpt.safetensors"));
+  const SafetensorsFile weights = load_safetensors(path("w.safetensors"));
+  EXPECT_TRUE(is_training_checkpoint(ckpt));
+  EXPECT_FALSE(is_training_checkpoint(weights));
+  const TensorMap state = net->state_dict();
+  for (const SafetensorsFile* f : {&ckpt, &weights}) {
+    const TensorMap m = model_tensors(*f);
+    ASSERT_EQ(m.size(), state.size());
+    for (const auto& [name, t] : state) {
+      ASSERT_TRUE(m.count(name)) << name;
+      EXPECT_TRUE(same_bits(t, m.at(name))) << name;
+    }
+  }
+}
+
 TEST_F(CheckpointTest, BadCheckpointsLoadNothing) {
   auto net = small_net(5);
   SGDOptions so;
