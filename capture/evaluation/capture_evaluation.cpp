@@ -384,7 +384,8 @@ void measure_detector_inputs(const EvaluationInputs& in, CaptureEvaluation& e) {
   std::vector<int> ids;
   for (const CapturedFrame& f : cap.frames) ids.push_back(f.id);
   try {
-    e.detections = measure_detections(cap.detections, in.info.dir, e.view, ids);
+    e.detections = measure_detections(
+        cap.detections, {in.info, in.character, in.gt_motion, in.gt_motion_path, in.cameras, in.cameras_path}, e.view, ids);
   } catch (const Error& error) {  // e.g. frames named otherwise than the dataset's: the rest still counts
     e.notes.push_back(fmt::format("the detector's inputs are not measured: {}", error.what()));
     spdlog::warn("{}", e.notes.back());

@@ -74,14 +74,22 @@ double fraction_within(const std::vector<double>& errors, const std::vector<doub
 DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view,
                                      const std::vector<int>& only_frames) {
   const DatasetInfo info = read_dataset_info(data);
+  const Character character = load_character(info.character);
+  const std::string gt = (fs::path(data) / "gt" / "pose.motion").string();
+  WEFT_CHECK(fs::exists(gt), gt, ": missing (the true keypoints come from the dataset's ground-truth pose)");
+  const Motion motion = read_motion(gt, int(character.rest_dofs.size()));
+  const std::string cameras_path = (fs::path(data) / "cameras.yaml").string();
+  std::map<std::string, Camera> cameras;
+  for (Camera& c : read_cameras_yaml(cameras_path)) cameras[c.name] = c;
+  return measure_detections(detections, {info, character, motion, gt, cameras, cameras_path}, view, only_frames);
+}
+
+DetectionAccuracy measure_detections(const std::string& detections, const DetectionTruth& truth,
+                                     const std::string& view, const std::vector<int>& only_frames) {
+  const DatasetInfo& info = truth.info;
+  const std::string& data = info.dir;
   WEFT_CHECK(std::find(info.views.begin(), info.views.end(), view) != info.views.end(), data, ": no view '", view,
              "' (dataset.yaml views)");
-  const Character character = load_character(info.character);
-  const fs::path gt = fs::path(data) / "gt" / "pose.motion";
-  WEFT_CHECK(fs::exists(gt), gt.string(), ": missing (the true keypoints come from the dataset's ground-truth pose)");
-  const Motion motion = read_motion(gt.string(), int(character.rest_dofs.size()));
-  std::map<std::string, Camera> cameras;
-  for (Camera& c : read_cameras_yaml((fs::path(data) / "cameras.yaml").string())) cameras[c.name] = c;
   std::vector<int> frames;
   for (const auto& [name, ids] : info.splits) frames.insert(frames.end(), ids.begin(), ids.end());
   std::sort(frames.begin(), frames.end());
@@ -110,10 +118,11 @@ DetectionAccuracy measure_detections(const std::string& detections, const std::s
     const double height = cv::boundingRect(truth_mask).height;
     const double threshold = a.pck_fraction * height;
 
-    WEFT_CHECK(f < motion.num_frames(), gt.string(), ": ", motion.num_frames(), " frames, the dataset has frame ", f);
-    const Vertices body25 = pose_character(character, motion.dofs.row(f).transpose()).body25;
-    const auto cam = cameras.find(dataset_camera_name(info, f, view));
-    WEFT_CHECK(cam != cameras.end(), data, "/cameras.yaml: no camera '", dataset_camera_name(info, f, view), "'");
+    WEFT_CHECK(f < truth.motion.num_frames(), truth.motion_path, ": ", truth.motion.num_frames(),
+               " frames, the dataset has frame ", f);
+    const Vertices body25 = pose_character(truth.character, truth.motion.dofs.row(f).transpose()).body25;
+    const auto cam = truth.cameras.find(dataset_camera_name(info, f, view));
+    WEFT_CHECK(cam != truth.cameras.end(), truth.cameras_path, ": no camera '", dataset_camera_name(info, f, view), "'");
     const Body25 labels = read_dataset_keypoints(dataset_keypoints_path(info, f, view));
     for (int m = 0; m < kBody25Count; ++m) {
       if (body25.row(m).allFinite()) {

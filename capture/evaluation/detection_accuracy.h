@@ -8,11 +8,16 @@
 // A keypoint the prediction leaves undetected while the truth has it counts as wrong at
 // any threshold and as an infinite error (medians include it).
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "capture/character/character.h"
+#include "capture/character/skeletool_io.h"
+#include "capture/dataset/synthetic_dataset.h"
+#include "capture/io/camera.h"
 #include "capture/io/openpose.h"
 
 namespace weft::capture {
@@ -40,6 +45,19 @@ struct DetectionAccuracy {
 // has); errors name the missing file or a frame the dataset lacks.
 DetectionAccuracy measure_detections(const std::string& detections, const std::string& data, const std::string& view,
                                      const std::vector<int>& frames = {});
+
+// The dataset's truth that measure needs, for a caller that has read it already (weft eval):
+// the posed character's keypoints from `motion`, the cameras by name (the files' paths for errors).
+struct DetectionTruth {
+  const DatasetInfo& info;
+  const Character& character;
+  const Motion& motion;
+  const std::string& motion_path;
+  const std::map<std::string, Camera>& cameras;
+  const std::string& cameras_path;
+};
+DetectionAccuracy measure_detections(const std::string& detections, const DetectionTruth& truth,
+                                     const std::string& view, const std::vector<int>& frames);
 
 // The headline figures, over all frames and keypoints (NaN where nothing was measured).
 struct DetectionFigures {
