@@ -13,7 +13,7 @@ CaptureConfig parse_capture_config(const std::string& text, const std::string& n
   c.file = name;
   if (!root || root.IsNull()) return c;
   if (!root.IsMap()) y.fail_at(root, "(document)", "expected a mapping of config keys");
-  y.check_keys(root, "", {"batch_size", "keying", "filter", "output"});
+  y.check_keys(root, "", {"batch_size", "keying", "filter", "refine", "output"});
   if (root["batch_size"]) {
     const double b = y.number(root["batch_size"], "batch_size", 1, 1024);
     if (b != int(b)) y.fail_at(root["batch_size"], "batch_size", "expected an integer");
@@ -34,6 +34,9 @@ CaptureConfig parse_capture_config(const std::string& text, const std::string& n
   if (const YAML::Node f = root["filter"])
     y.numbers(f, "filter.", {{"sigma_frames", &c.filter_sigma_frames, 0, 100}},
               {{"radius_frames", &c.filter_radius_frames, 0, 50}}, {});
+  if (const YAML::Node r = root["refine"])
+    y.numbers(r, "refine.", {{"prior", &c.refine.prior, 0, 1e6}, {"lr", &c.refine.lr, 1e-6, 10}},
+              {{"iterations", &c.refine.iterations, 0, 10000}, {"batch_size", &c.refine.batch_size, 1, 4096}}, {});
   if (const YAML::Node o = root["output"]) {
     y.numbers(o, "output.", {{"overlay_alpha", &c.overlay_alpha, 0, 1}}, {},
               {"meshes", "overlays", "video"});

@@ -17,6 +17,14 @@ struct KeyingConfig {
   bool largest_component = true;  // keep only the largest connected foreground region
 };
 
+// Fitting PoseNet's output to the input view's detections (capture/inference/pose_refinement.h).
+struct PoseRefinementConfig {
+  int iterations = 0;   // Adam steps per frame; 0: off (the network's output as it is)
+  double prior = 1e-3;  // weight of ‖o − o_net‖² / P against L_lm (in view widths²: about 1e-4 at 2.5 px of 256)
+  double lr = 0.02;     // Adam's step on o (PoseNet's units: dof_scale radians per unit for most dofs)
+  int batch_size = 32;  // frames optimised together (independent: the losses are sums over frames)
+};
+
 struct CaptureConfig {
   std::string file;       // where it was read from ("" for the defaults)
   int batch_size = 8;     // frames per network pass
@@ -26,6 +34,7 @@ struct CaptureConfig {
   // the sequence's ends. sigma_frames = 0 switches it off.
   double filter_sigma_frames = 1.0;
   int filter_radius_frames = 2;
+  PoseRefinementConfig refine;  // before the filter
   std::vector<std::string> mesh_formats = {"ply", "obj"};  // per frame, body and cloth
   bool overlays = true;   // overlays/<id>.png: the meshes drawn over the input
   bool video = true;      // overlay.mp4 (or overlay.avi when no MP4 encoder is available)

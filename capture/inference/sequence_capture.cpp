@@ -15,6 +15,7 @@
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/capture_config.h"
+#include "capture/inference/pose_refinement.h"
 #include "capture/inference/root_placement.h"
 #include "capture/inference/sequence_input.h"
 #include "capture/inference/silhouette_translation.h"
@@ -440,6 +441,10 @@ void write_capture_json(const CaptureContext& c, const ModelFolder& model, const
   j["detections"] = detected ? kDetectionsFolder : "";
   j["fps"] = fps;
   j["filter"] = {{"sigma_frames", c.cfg.filter_sigma_frames}, {"radius_frames", c.cfg.filter_radius_frames}};
+  const PoseRefinementConfig& rc = c.cfg.refine;
+  j["refine"] = {{"iterations", rc.iterations}, {"prior", rc.prior}, {"lr", rc.lr},
+                 {"frames", summary.refinement.frames}, {"keypoint_error_before_px", summary.refinement.error_before_px},
+                 {"keypoint_error_after_px", summary.refinement.error_after_px}};
   j["collisions_resolved"] = o.resolve_collisions;
   j["video"] = video_path.empty() ? "" : fs::path(video_path).filename().string();
   j["frames"] = frame_list;
@@ -483,12 +488,22 @@ CaptureSummary capture_sequence(const CaptureOptions& o,
   clock.lap("load");
   const CaptureContext c{o, cfg, character, out, clock, progress};
 
-  const NetworkOutputs net = run_networks(c, model.network, nets, capture_model.keypoint_mask(), input);
+  NetworkOutputs net = run_networks(c, model.network, nets, capture_model.keypoint_mask(), input);
+  CaptureSummary summary;
+  if (cfg.refine.iterations > 0) {
+    std::vector<KeypointView> views;
+    for (const FrameRecord& r : net.frames) views.push_back({r.camera, r.detections});
+    summary.refinement = refine_pose_outputs(capture_model, views, net.pose_rows, cfg.refine);
+    const PoseRefinementSummary& rs = summary.refinement;
+    spdlog::info("poses fitted to the input view's detections: {} frames, mean keypoint error {:.2f} -> {:.2f} px "
+                 "({} Adam steps, prior {:g}, {:.1f} s)",
+                 rs.frames, rs.error_before_px, rs.error_after_px, cfg.refine.iterations, cfg.refine.prior, rs.seconds);
+    clock.lap("refine");
+  }
   const FilteredOutputs filtered = filter_outputs(net, cfg);
   clock.lap("filter");
   const std::unique_ptr<GarmentCollisionResolver> resolver = collision_resolver(o, model, character);
 
-  CaptureSummary summary;
   summary.frames = int(net.frames.size());
   summary.metres_per_unit = character.metres_per_unit;
   OverlayVideo video(out, fps);

@@ -26,6 +26,8 @@
 #include <map>
 #include <string>
 
+#include "capture/inference/pose_refinement.h"
+
 namespace weft::capture {
 
 // OUT's folder of the detector's keypoints and masks (capture.json "detections").
@@ -60,6 +62,7 @@ struct CaptureSummary {
   // before and after the pass (character units).
   double penetration_before = 0, penetration_after = 0;
   double metres_per_unit = 1;  // the character's
+  PoseRefinementSummary refinement;  // with refine.iterations > 0
   double fps() const { return seconds > 0 ? frames / seconds : 0; }
 };
 

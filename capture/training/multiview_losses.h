@@ -14,23 +14,16 @@
 #include "geometry/mesh.h"
 #include "capture/dataset/multiview_supervision.h"
 #include "capture/model/global_pose.h"
+#include "capture/model/view_landmark_loss.h"
 #include "graph/tensor.h"
 
 namespace weft::capture {
-
-struct LandmarkStatistics {
-  double mean_error_px = 0;  // mean ‖Π(K) − d‖ over detections with confidence ≥ 0.1 (full-image px)
-  int detections = 0;
-};
 
 // keypoints [B,25,3] world; frames: each sample's frame; keypoint_mask: 25 values (0/1).
 Tensor multiview_landmark_loss(const Tensor& keypoints, const std::vector<int>& frames,
                                const MultiviewSupervision& supervision, const std::vector<double>& keypoint_mask,
                                LandmarkStatistics* statistics = nullptr);
-// The same over given views: views[b] are sample b's cameras and detections (any number;
-// a view with a keypoint behind its camera is skipped), e.g. virtual_poses.h's.
-Tensor landmark_loss_over_views(const Tensor& keypoints, const std::vector<std::vector<KeypointView>>& views,
-                                const std::vector<double>& keypoint_mask, LandmarkStatistics* statistics = nullptr);
+// The same over given views: landmark_loss_over_views (capture/model/view_landmark_loss.h).
 
 // vertices [B,V,3] world (body and cloth together), faces of that mesh.
 Tensor multiview_silhouette_loss(const Tensor& vertices, const Faces& faces, const std::vector<int>& frames,

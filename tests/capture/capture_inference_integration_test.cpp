@@ -305,3 +305,32 @@ TEST(Infer, ResolvesCollisionsWhenAsked) {
     EXPECT_LE(frame["collisions"]["max_depth_after"].get<double>(), frame["collisions"]["max_depth_before"].get<double>() + 1e-12);
   }
 }
+
+// refine: each frame's PoseNet output moves to fit the input view's detections (here an
+// untrained network's, far from them): their error falls, capture.json records it, and a
+// heavy prior holds the network's output.
+TEST(Infer, FittingThePosesToTheDetectionsBringsTheSkeletonToThem) {
+  const Fixture& f = fixture();
+  const fs::path root = infer_scratch_root() / "refine";
+  fs::create_directories(root);
+  auto capture = [&](const std::string& name, const std::string& refine) {
+    CaptureOptions o = view_capture(f, "cam02");
+    o.config = (root / (name + ".yaml")).string();
+    std::ofstream(o.config) << "refine: " << refine << "\noutput: {overlays: false, video: false}\n";
+    o.out = (root / name).string();
+    const CaptureSummary s = capture_sequence(o);
+    std::ifstream in(root / name / "capture.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["refine"]["frames"], s.refinement.frames) << name;
+    EXPECT_DOUBLE_EQ(j["refine"]["keypoint_error_after_px"].get<double>(), s.refinement.error_after_px) << name;
+    return s.refinement;
+  };
+  const PoseRefinementSummary fitted = capture("fitted", "{iterations: 150, prior: 0, lr: 0.05}");
+  EXPECT_EQ(fitted.frames, 6);
+  EXPECT_GT(fitted.error_before_px, 5.0) << "the untrained network misses the detections";
+  EXPECT_LT(fitted.error_after_px, 0.5 * fitted.error_before_px);
+  const PoseRefinementSummary held = capture("held", "{iterations: 150, prior: 1.0e+6, lr: 0.05}");
+  EXPECT_NEAR(held.error_before_px, fitted.error_before_px, 1e-9) << "the same network output";
+  EXPECT_GT(held.error_after_px, 0.9 * held.error_before_px) << "the prior keeps the network's pose";
+  EXPECT_EQ(capture("off", "{iterations: 0}").frames, 0);
+}

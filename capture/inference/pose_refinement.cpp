@@ -1,0 +1,79 @@
+#include "capture/inference/pose_refinement.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "capture/model/view_landmark_loss.h"
+#include "graph/autograd.h"
+#include "graph/error.h"
+#include "nn/optim.h"
+#include "ops/ops.h"
+
+namespace weft::capture {
+
+PoseRefinementSummary refine_pose_outputs(const CaptureModel& model, const std::vector<KeypointView>& views,
+                                          std::vector<Eigen::VectorXd>& outputs, const PoseRefinementConfig& config) {
+  WEFT_CHECK(views.size() == outputs.size(), "refine_pose_outputs: ", views.size(), " views for ", outputs.size(),
+             " frames");
+  PoseRefinementSummary s;
+  if (config.iterations <= 0 || outputs.empty()) return s;
+  const auto start_time = std::chrono::steady_clock::now();
+  const std::vector<double>& mask = model.keypoint_mask();
+  std::vector<size_t> fitted;
+  for (size_t i = 0; i < views.size(); ++i) {
+    int mapped = 0;
+    for (int m = 0; m < kBody25Count; ++m) mapped += views[i].detections(m, 2) > 0 && mask[size_t(m)] > 0;
+    if (mapped >= 2) fitted.push_back(i);
+  }
+  const int64_t P = outputs[0].size();
+  double before_sum = 0, after_sum = 0;
+  int detections = 0;
+  for (size_t first = 0; first < fitted.size(); first += size_t(config.batch_size)) {
+    const int64_t B = int64_t(std::min(fitted.size() - first, size_t(config.batch_size)));
+    std::vector<double> start;
+    std::vector<std::vector<KeypointView>> batch_views(static_cast<size_t>(B));
+    SampleViews placed;
+    for (int64_t b = 0; b < B; ++b) {
+      const size_t i = fitted[first + size_t(b)];
+      WEFT_CHECK(outputs[i].size() == P, "refine_pose_outputs: frame ", i, " has ", outputs[i].size(), " outputs, not ", P);
+      start.insert(start.end(), outputs[i].data(), outputs[i].data() + P);
+      batch_views[size_t(b)].push_back(views[i]);
+      placed.input_rotations.push_back(views[i].camera.R);
+    }
+    placed.translation = root_translation_terms(batch_views, mask, DType::F32);
+    const Tensor network = Tensor::from_data({B, P}, start, DType::F32);
+    Tensor o = Tensor::from_data({B, P}, start, DType::F32);
+    o.set_requires_grad(true);
+    nn::AdamOptions ao;
+    ao.lr = config.lr;
+    nn::Adam adam({{"outputs", o}}, ao);
+    LandmarkStatistics before;
+    for (int it = 0; it < config.iterations; ++it) {
+      adam.zero_grad();
+      const CapturePrediction p = model.predict(o, Tensor(), placed, false);
+      const Tensor fit = landmark_loss_over_views(p.keypoints, batch_views, mask, it == 0 ? &before : nullptr);
+      const Tensor d = ops::sub(o, network);
+      const Tensor prior = ops::scale(ops::sum(ops::mul(d, d)), config.prior / double(B * P));
+      ops::add(fit, prior).backward();
+      adam.step();
+    }
+    LandmarkStatistics after;
+    {
+      NoGradGuard no_grad;
+      landmark_loss_over_views(model.predict(o, Tensor(), placed, false).keypoints, batch_views, mask, &after);
+    }
+    before_sum += before.mean_error_px * before.detections;
+    after_sum += after.mean_error_px * after.detections;
+    detections += before.detections;
+    const float* fitted_o = o.data<float>();
+    for (int64_t b = 0; b < B; ++b)
+      outputs[fitted[first + size_t(b)]] = Eigen::Map<const Eigen::VectorXf>(fitted_o + b * P, P).cast<double>();
+  }
+  s.frames = int(fitted.size());
+  s.error_before_px = detections ? before_sum / detections : 0;
+  s.error_after_px = detections ? after_sum / detections : 0;
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  return s;
+}
+
+}  // namespace weft::capture

@@ -1,0 +1,32 @@
+#pragma once
+// Fitting PoseNet's output to the input view's detections at capture time (weft's own, not
+// the paper's: DeepCap regresses the pose and stops). A network that reads the detections
+// still misses them (on unseen motion its root-relative error across the image is larger
+// than along the camera's axis, docs/RESULTS.md), so each frame's output o (pose and root
+// rotation, in PoseNet's units) moves from the network's o_net to lower
+//   L_lm(o) over the input view + prior · ‖o − o_net‖² / P          (P outputs per frame)
+// by Adam, the root translation re-solved from the keypoint rays at every step as in
+// training. The view constrains the image plane; the prior keeps the rest (depth, what no
+// detection sees) near the network's. Frames with fewer than two mapped detections keep o_net.
+#include <Eigen/Core>
+#include <vector>
+
+#include "capture/model/capture_networks.h"
+#include "capture/inference/capture_config.h"
+#include "capture/model/global_pose.h"
+
+namespace weft::capture {
+
+struct PoseRefinementSummary {
+  int frames = 0;                  // frames refined
+  double error_before_px = 0;      // mean ‖Π(K) − d‖ over their detections (conf ≥ 0.1), input view px
+  double error_after_px = 0;
+  double seconds = 0;
+};
+
+// outputs[i]: frame i's PoseNet output, replaced by the fitted one; views[i]: its input view
+// (camera and detections in full-image pixels).
+PoseRefinementSummary refine_pose_outputs(const CaptureModel& model, const std::vector<KeypointView>& views,
+                                          std::vector<Eigen::VectorXd>& outputs, const PoseRefinementConfig& config);
+
+}  // namespace weft::capture
