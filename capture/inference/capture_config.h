@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "capture/model/pose_refinement.h"
+
 namespace weft::capture {
 
 // Green-screen keying (OpenCV's HSV: hue 0..180, saturation and value 0..255): a pixel is
@@ -15,14 +17,6 @@ struct KeyingConfig {
   double min_saturation = 80, min_value = 40;
   int open_px = 1, close_px = 3;  // radii of the elliptic structuring elements (0: off)
   bool largest_component = true;  // keep only the largest connected foreground region
-};
-
-// Fitting PoseNet's output to the input view's detections (capture/inference/pose_refinement.h).
-struct PoseRefinementConfig {
-  int iterations = 0;   // Adam steps per frame; 0: off (the network's output as it is)
-  double prior = 1e-3;  // weight of ‖o − o_net‖² / P against L_lm (in view widths²: about 1e-4 at 2.5 px of 256)
-  double lr = 0.02;     // Adam's step on o (PoseNet's units: dof_scale radians per unit for most dofs)
-  int batch_size = 32;  // frames optimised together (independent: the losses are sums over frames)
 };
 
 struct CaptureConfig {

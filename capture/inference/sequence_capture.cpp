@@ -15,7 +15,7 @@
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/capture_config.h"
-#include "capture/inference/pose_refinement.h"
+#include "capture/model/pose_refinement.h"
 #include "capture/inference/root_placement.h"
 #include "capture/inference/sequence_input.h"
 #include "capture/inference/silhouette_translation.h"

@@ -26,7 +26,7 @@
 #include <map>
 #include <string>
 
-#include "capture/inference/pose_refinement.h"
+#include "capture/model/pose_refinement.h"
 
 namespace weft::capture {
 

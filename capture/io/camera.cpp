@@ -11,6 +11,12 @@
 
 namespace weft::capture {
 
+bool in_front(const Camera& camera, const Vertices& V) {
+  for (int i = 0; i < V.rows(); ++i)
+    if (camera.depth(V.row(i).transpose()) <= 1e-6) return false;
+  return true;
+}
+
 Eigen::Vector2d Camera::project(const Eigen::Vector3d& X) const {
   const Eigen::Vector3d c = R * X + t;
   const double a = c.x() / c.z(), b = c.y() / c.z();

@@ -33,6 +33,9 @@ struct Camera {
   Eigen::Vector3d center() const { return -R.transpose() * t; }
 };
 
+// Every vertex in front of the camera (projection refuses points behind it).
+bool in_front(const Camera& camera, const Vertices& V);
+
 Points2 project_points(const Camera& camera, const Vertices& world);
 
 // Throws weft::Error (prefixed by `what`) unless K is finite with positive focal lengths,

@@ -2,7 +2,6 @@
 
 #include "capture/deformation/losses.h"
 #include "capture/model/capture_networks.h"
-#include "capture/render/silhouette_iou.h"
 #include "graph/error.h"
 #include "ops/geometry.h"
 #include "ops/ops.h"

@@ -5,12 +5,6 @@
 
 namespace weft::capture {
 
-bool in_front(const Camera& camera, const Vertices& V) {
-  for (int i = 0; i < V.rows(); ++i)
-    if (camera.depth(V.row(i).transpose()) <= 1e-6) return false;
-  return true;
-}
-
 double rendered_silhouette_iou(const Camera& camera, const TriangleMesh& body_mesh, const Vertices& body,
                                const TriangleMesh* cloth_mesh, const Vertices* cloth, const cv::Mat& mask) {
   WEFT_CHECK(!cloth || cloth_mesh, "rendered_silhouette_iou: cloth vertices without a cloth mesh");

@@ -8,8 +8,6 @@
 
 namespace weft::capture {
 
-// Every vertex in front of the camera (projection refuses points behind it).
-bool in_front(const Camera& camera, const Vertices& V);
 
 // IoU of the body (and the cloth, when given) rendered by `camera` against `mask` (CV_8UC1
 // of the camera's size). The meshes give the faces, `body` and `cloth` the posed vertices

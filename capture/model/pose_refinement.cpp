@@ -1,8 +1,9 @@
-#include "capture/inference/pose_refinement.h"
+#include "capture/model/pose_refinement.h"
 
 #include <algorithm>
 #include <chrono>
 
+#include "capture/model/capture_networks.h"
 #include "capture/model/view_landmark_loss.h"
 #include "graph/autograd.h"
 #include "graph/error.h"

@@ -11,11 +11,19 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "capture/model/capture_networks.h"
-#include "capture/inference/capture_config.h"
 #include "capture/model/global_pose.h"
 
 namespace weft::capture {
+
+class CaptureModel;
+
+// The capture config's `refine` section (docs/CAPTURE.md).
+struct PoseRefinementConfig {
+  int iterations = 0;   // Adam steps per frame; 0: off (the network's output as it is)
+  double prior = 1e-3;  // weight of ‖o − o_net‖² / P against L_lm (in view widths²: about 1e-4 at 2.5 px of 256)
+  double lr = 0.02;     // Adam's step on o (PoseNet's units: dof_scale radians per unit for most dofs)
+  int batch_size = 32;  // frames optimised together (independent: the losses are sums over frames)
+};
 
 struct PoseRefinementSummary {
   int frames = 0;                  // frames refined
