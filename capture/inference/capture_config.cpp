@@ -35,7 +35,7 @@ CaptureConfig parse_capture_config(const std::string& text, const std::string& n
     y.numbers(f, "filter.", {{"sigma_frames", &c.filter_sigma_frames, 0, 100}},
               {{"radius_frames", &c.filter_radius_frames, 0, 50}}, {});
   if (const YAML::Node r = root["refine"])
-    y.numbers(r, "refine.", {{"prior", &c.refine.prior, 0, 1e6}, {"lr", &c.refine.lr, 1e-6, 10}},
+    y.numbers(r, "refine.", {{"prior", &c.refine.prior, 0, 1e6}, {"lr", &c.refine.lr, 1e-6, 10}, {"depth_prior", &c.refine.depth_prior, 0, 1e9}},
               {{"iterations", &c.refine.iterations, 0, 10000}, {"batch_size", &c.refine.batch_size, 1, 4096}}, {});
   if (const YAML::Node o = root["output"]) {
     y.numbers(o, "output.", {{"overlay_alpha", &c.overlay_alpha, 0, 1}}, {},

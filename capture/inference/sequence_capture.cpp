@@ -442,7 +442,7 @@ void write_capture_json(const CaptureContext& c, const ModelFolder& model, const
   j["fps"] = fps;
   j["filter"] = {{"sigma_frames", c.cfg.filter_sigma_frames}, {"radius_frames", c.cfg.filter_radius_frames}};
   const PoseRefinementConfig& rc = c.cfg.refine;
-  j["refine"] = {{"iterations", rc.iterations}, {"prior", rc.prior}, {"lr", rc.lr},
+  j["refine"] = {{"iterations", rc.iterations}, {"prior", rc.prior}, {"depth_prior", rc.depth_prior}, {"lr", rc.lr},
                  {"frames", summary.refinement.frames}, {"keypoint_error_before_px", summary.refinement.error_before_px},
                  {"keypoint_error_after_px", summary.refinement.error_after_px}};
   j["collisions_resolved"] = o.resolve_collisions;

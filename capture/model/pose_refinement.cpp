@@ -27,6 +27,11 @@ PoseRefinementSummary refine_pose_outputs(const CaptureModel& model, const std::
     if (mapped >= 2) fitted.push_back(i);
   }
   const int64_t P = outputs[0].size();
+  const double metres_per_unit = model.character().metres_per_unit;
+  constexpr int kMidHip = 8;  // BODY_25
+  double mapped_keypoints = 0;
+  for (double m : mask) mapped_keypoints += m > 0;
+  const Tensor depth_mask = Tensor::from_data({1, kBody25Count}, mask, DType::F32);
   double before_sum = 0, after_sum = 0;
   int detections = 0;
   for (size_t first = 0; first < fitted.size(); first += size_t(config.batch_size)) {
@@ -45,6 +50,20 @@ PoseRefinementSummary refine_pose_outputs(const CaptureModel& model, const std::
     const Tensor network = Tensor::from_data({B, P}, start, DType::F32);
     Tensor o = Tensor::from_data({B, P}, start, DType::F32);
     o.set_requires_grad(true);
+    // Each keypoint's depth along its frame's input camera axis, relative to MidHip (metres).
+    std::vector<double> axis_values;
+    for (int64_t b = 0; b < B; ++b)
+      for (int j = 0; j < 3; ++j) axis_values.push_back(placed.input_rotations[size_t(b)](2, j) * metres_per_unit);
+    const Tensor axis = Tensor::from_data({B, 1, 3}, axis_values, DType::F32);
+    const auto relative_depth = [&](const Tensor& keypoints) {
+      const Tensor z = ops::sum(ops::mul(keypoints, axis), {2});  // [B,25]
+      return ops::sub(z, ops::slice(z, 1, kMidHip, kMidHip + 1));
+    };
+    Tensor network_depth;
+    if (config.depth_prior > 0) {
+      NoGradGuard no_grad;
+      network_depth = relative_depth(model.predict(network, Tensor(), placed, false).keypoints);
+    }
     nn::AdamOptions ao;
     ao.lr = config.lr;
     nn::Adam adam({{"outputs", o}}, ao);
@@ -54,8 +73,12 @@ PoseRefinementSummary refine_pose_outputs(const CaptureModel& model, const std::
       const CapturePrediction p = model.predict(o, Tensor(), placed, false);
       const Tensor fit = landmark_loss_over_views(p.keypoints, batch_views, mask, it == 0 ? &before : nullptr);
       const Tensor d = ops::sub(o, network);
-      const Tensor prior = ops::scale(ops::sum(ops::mul(d, d)), config.prior / double(B * P));
-      ops::add(fit, prior).backward();
+      Tensor loss = ops::add(fit, ops::scale(ops::sum(ops::mul(d, d)), config.prior / double(B * P)));
+      if (config.depth_prior > 0) {
+        const Tensor dz = ops::mul(ops::sub(relative_depth(p.keypoints), network_depth), depth_mask);
+        loss = ops::add(loss, ops::scale(ops::sum(ops::mul(dz, dz)), config.depth_prior / (double(B) * mapped_keypoints)));
+      }
+      loss.backward();
       adam.step();
     }
     LandmarkStatistics after;

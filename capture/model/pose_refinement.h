@@ -5,6 +5,7 @@
 // than along the camera's axis, docs/RESULTS.md), so each frame's output o (pose and root
 // rotation, in PoseNet's units) moves from the network's o_net to lower
 //   L_lm(o) over the input view + prior · ‖o − o_net‖² / P          (P outputs per frame)
+//     + depth_prior · mean_k (z_k(o) − z_k(o_net))²   (z: depth relative to MidHip, metres)
 // by Adam, the root translation re-solved from the keypoint rays at every step as in
 // training. The view constrains the image plane; the prior keeps the rest (depth, what no
 // detection sees) near the network's. Frames with fewer than two mapped detections keep o_net.
@@ -23,6 +24,10 @@ struct PoseRefinementConfig {
   double prior = 1e-3;  // weight of ‖o − o_net‖² / P against L_lm (in view widths²: about 1e-4 at 2.5 px of 256)
   double lr = 0.02;     // Adam's step on o (PoseNet's units: dof_scale radians per unit for most dofs)
   int batch_size = 32;  // frames optimised together (independent: the losses are sums over frames)
+  // Weight of the mean squared change (m²) of each keypoint's depth along the input camera's
+  // axis, relative to MidHip, from the network's: the fit moves what the view sees and
+  // leaves the depth no detection measures. 0: off.
+  double depth_prior = 0;
 };
 
 struct PoseRefinementSummary {

@@ -11,11 +11,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <random>
 
 #include "capture/character/skeletool_io.h"
 #include "capture/adaptation/domain_adaptation.h"
+#include "capture/dataset/synthetic_dataset.h"
 #include "capture/inference/sequence_capture.h"
 #include "capture/inference/silhouette_translation.h"
 #include "geometry/mesh_io.h"
@@ -25,6 +27,7 @@
 #include "capture/model/capture_networks.h"
 #include "capture/training/loss_log.h"
 #include "capture/model/model_folder.h"
+#include "graph/autograd.h"
 #include "nn/checkpoint.h"
 #include "tests/capture/shared_fixture.h"
 #include "tests/capture/test_files.h"
@@ -333,4 +336,54 @@ TEST(Infer, FittingThePosesToTheDetectionsBringsTheSkeletonToThem) {
   EXPECT_NEAR(held.error_before_px, fitted.error_before_px, 1e-9) << "the same network output";
   EXPECT_GT(held.error_after_px, 0.9 * held.error_before_px) << "the prior keeps the network's pose";
   EXPECT_EQ(capture("off", "{iterations: 0}").frames, 0);
+}
+
+// refine.depth_prior: fitting the rest pose to a frame's detections moves the keypoints'
+// depths (relative to MidHip, along the camera's axis) far less with the depth prior than
+// without, while both still bring the skeleton to the detections.
+TEST(Infer, TheDepthPriorLeavesTheDepthTheDetectionsCannotSee) {
+  const Fixture& f = fixture();
+  const Character character = load_character((f.model / "character" / "character.yaml").string());
+  const TrainingConfig cfg = load_training_config((f.model / "config.yaml").string());
+  const CaptureModel model(character, cfg.network);
+  const DatasetInfo info = read_dataset_info(f.data.string());
+  std::map<std::string, Camera> cameras;
+  for (Camera& c : read_cameras_yaml((f.data / "cameras.yaml").string())) cameras[c.name] = c;
+  std::vector<KeypointView> views;
+  for (int frame : {0, 3})
+    views.push_back({cameras.at(dataset_camera_name(info, frame, "cam02")),
+                     read_dataset_keypoints(dataset_keypoints_path(info, frame, "cam02"))});
+  const std::vector<Eigen::VectorXd> rest(views.size(), Eigen::VectorXd::Zero(model.pose_outputs()));
+  // Keypoint depths relative to MidHip (metres) of outputs, for frame b.
+  auto depths = [&](const std::vector<Eigen::VectorXd>& outputs, size_t b) {
+    std::vector<std::vector<KeypointView>> one{{views[b]}};
+    SampleViews placed;
+    placed.input_rotations = {views[b].camera.R};
+    placed.translation = root_translation_terms(one, model.keypoint_mask(), weft::DType::F32);
+    std::vector<double> o(outputs[b].data(), outputs[b].data() + outputs[b].size());
+    weft::NoGradGuard no_grad;
+    const Vertices k = sample_vertices(
+        model.predict(weft::Tensor::from_data({1, int64_t(o.size())}, o, weft::DType::F32), weft::Tensor(), placed, false)
+            .keypoints, 0);
+    Eigen::VectorXd z(kBody25Count);
+    for (int m = 0; m < kBody25Count; ++m) z(m) = views[b].camera.R.row(2).dot(k.row(m) - k.row(8)) * character.metres_per_unit;
+    return z;
+  };
+  PoseRefinementConfig rc;
+  rc.iterations = 200, rc.prior = 0, rc.lr = 0.05;
+  std::vector<Eigen::VectorXd> free = rest, held = rest;
+  const PoseRefinementSummary a = refine_pose_outputs(model, views, free, rc);
+  rc.depth_prior = 100;
+  const PoseRefinementSummary b = refine_pose_outputs(model, views, held, rc);
+  EXPECT_LT(a.error_after_px, 0.5 * a.error_before_px);
+  EXPECT_LT(b.error_after_px, 0.7 * b.error_before_px) << "the image plane still fits";
+  double moved_free = 0, moved_held = 0;
+  for (size_t i = 0; i < views.size(); ++i) {
+    const Eigen::VectorXd z0 = depths(rest, i);
+    moved_free += (depths(free, i) - z0).norm(), moved_held += (depths(held, i) - z0).norm();
+  }
+  std::printf("keypoint depth change (m, norm over keypoints, sum over frames): free %.4f, depth prior %.4f\n", moved_free,
+              moved_held);
+  EXPECT_GT(moved_free, 0.05);
+  EXPECT_LT(moved_held, 0.3 * moved_free);
 }

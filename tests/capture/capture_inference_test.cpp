@@ -139,7 +139,9 @@ TEST(CaptureConfig, ReadsTheDefaultsFileAndNamesBadKeys) {
   expect_error([] { parse_capture_config("keying: {hue_min: 90, hue_max: 40}\n", "x.yaml"); }, {"keying.hue_min"});
   expect_error([] { parse_capture_config("batch_size: 0\n", "x.yaml"); }, {"batch_size"});
   EXPECT_EQ(c.refine.iterations, 0) << "the network's output as it is, unless asked";
-  const CaptureConfig r = parse_capture_config("refine: {iterations: 300, prior: 1.0e-4, lr: 0.05}\n", "r.yaml");
+  const CaptureConfig r =
+      parse_capture_config("refine: {iterations: 300, prior: 1.0e-4, lr: 0.05, depth_prior: 10}\n", "r.yaml");
+  EXPECT_DOUBLE_EQ(r.refine.depth_prior, 10);
   EXPECT_EQ(r.refine.iterations, 300);
   EXPECT_DOUBLE_EQ(r.refine.prior, 1e-4);
   EXPECT_DOUBLE_EQ(r.refine.lr, 0.05);
