@@ -187,7 +187,7 @@ NetworkOutputs run_networks(const CaptureContext& c, const NetworkConfig& networ
       r.camera = f.camera;
       r.box = cv::boundingRect(f.mask);
       r.detections = f.detections;
-      for (int k = 0; k < kBody25Count; ++k) r.mapped_detections += r.detections(k, 2) > 0 && keypoint_mask[size_t(k)] > 0;
+      r.mapped_detections = mapped_detection_count(r.detections, keypoint_mask);
       write_detector_inputs(c.out, input, f);
       clock.lap("write");
       samples.push_back(prepare_sample(f.frame.bgr, f.mask, r.detections, r.camera, crop_options));

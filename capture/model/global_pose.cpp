@@ -66,6 +66,14 @@ Tensor rotation_from_6d(const Tensor& x) {
   return ops::stack({b1, b2, b3}, 2);  // R[:, i, j] = b_j[i]: the b's are the columns
 }
 
+int mapped_detection_count(const Body25& detections, const std::vector<double>& keypoint_mask) {
+  WEFT_CHECK(keypoint_mask.size() == size_t(kBody25Count), "mapped_detection_count: ", keypoint_mask.size(),
+             " mask weights, expected ", kBody25Count);
+  int n = 0;
+  for (int k = 0; k < kBody25Count; ++k) n += detections(k, 2) > 0 && keypoint_mask[size_t(k)] > 0;
+  return n;
+}
+
 RootTranslationTerms root_translation_terms(const std::vector<std::vector<KeypointView>>& views,
                                             const std::vector<double>& keypoint_mask, DType dtype) {
   constexpr int M = kBody25Count;

@@ -41,6 +41,10 @@ struct KeypointView {
   Body25 detections;
 };
 
+// Detected keypoints (confidence > 0) the character maps (keypoint_mask > 0). A view with
+// fewer than two places neither the root translation nor a fit of the pose.
+int mapped_detection_count(const Body25& detections, const std::vector<double>& keypoint_mask);
+
 // views[b]: the views of frame b (any number, possibly none). keypoint_mask: M = 25 weights,
 // 1 for keypoints the character maps, 0 otherwise. Solved in double, stored as `dtype`.
 // Throws weft::Error for a mask of the wrong size or a negative or non-finite weight.

@@ -21,11 +21,8 @@ PoseRefinementSummary refine_pose_outputs(const CaptureModel& model, const std::
   const auto start_time = std::chrono::steady_clock::now();
   const std::vector<double>& mask = model.keypoint_mask();
   std::vector<size_t> fitted;
-  for (size_t i = 0; i < views.size(); ++i) {
-    int mapped = 0;
-    for (int m = 0; m < kBody25Count; ++m) mapped += views[i].detections(m, 2) > 0 && mask[size_t(m)] > 0;
-    if (mapped >= 2) fitted.push_back(i);
-  }
+  for (size_t i = 0; i < views.size(); ++i)
+    if (mapped_detection_count(views[i].detections, mask) >= 2) fitted.push_back(i);
   const int64_t P = outputs[0].size();
   const double metres_per_unit = model.character().metres_per_unit;
   constexpr int kMidHip = 8;  // BODY_25

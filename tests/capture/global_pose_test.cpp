@@ -262,5 +262,19 @@ TEST(GlobalPose, RootTranslationRejectsBadInputs) {
   EXPECT_THROW(rotation_from_6d(Tensor::zeros({2, 3}, DType::F64)), Error);
 }
 
+// What decides whether a view can place the root or be fitted: detected and mapped keypoints.
+TEST(GlobalPose, MappedDetectionsCountOnlyDetectedKeypointsTheCharacterMaps) {
+  Body25 d = Body25::Zero();
+  d(0, 2) = 0.9;   // detected, mapped
+  d(4, 2) = 0.05;  // detected with low confidence, mapped
+  d(15, 2) = 0.8;  // detected, not mapped
+  d(7, 0) = 100;   // a position without confidence: not detected
+  std::vector<double> mask = kAllKeypoints;
+  mask[15] = 0;
+  EXPECT_EQ(mapped_detection_count(d, mask), 2);
+  EXPECT_EQ(mapped_detection_count(Body25::Zero(), mask), 0);
+  EXPECT_THROW(mapped_detection_count(d, std::vector<double>(24, 1.0)), Error);
+}
+
 }  // namespace
 }  // namespace weft::capture
