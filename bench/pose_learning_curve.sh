@@ -11,7 +11,8 @@
 #   bench/pose_learning_curve.sh OUT RUN [RUN ...]
 #
 # Environment: UNSEEN the test clip (default OUT/unseen, made from
-# configs/synth/unseen_studio.yaml when missing), VIEW the input view (default cam03).
+# configs/synth/unseen_studio.yaml when missing), VIEW the input view (default cam03),
+# KEEP_MESHES=1 to keep each checkpoint's captured meshes (deleted after its evaluation).
 # Runs keep their checkpoints with checkpoint_every / keep_checkpoints in their config
 # (e.g. 500 and 4 for a 2,000-step pose stage). docs/RESULTS.md has the figures.
 set -euo pipefail
@@ -41,6 +42,9 @@ for run in "$@"; do
     "$weft" infer --model "$run" --weights "$ckpt" --input "$unseen/images/$view" --camera "$unseen/cameras.yaml" \
       --camera-name "$view" --keypoints "$unseen/keypoints/$view" --out "$dir/capture" > "$dir/infer.log" 2>&1
     "$weft" eval --prediction "$dir/capture" --data "$unseen" --out "$dir/report" --gt-translation > "$dir/eval.log" 2>&1
+    # Measured: the meshes (~100 MB per checkpoint) are not kept; capture.json, pose.bvh and
+    # the report are. KEEP_MESHES=1 keeps them.
+    [ "${KEEP_MESHES:-0}" = 1 ] || rm -rf "$dir/capture/meshes"
   done
 done
 python3 - "$out" "$@" <<'EOF'
