@@ -20,14 +20,14 @@ class CaptureModel;
 
 // The capture config's `refine` section (docs/CAPTURE.md).
 struct PoseRefinementConfig {
-  int iterations = 0;   // Adam steps per frame; 0: off (the network's output as it is)
-  double prior = 1e-3;  // weight of ‖o − o_net‖² / P against L_lm (in view widths²: about 1e-4 at 2.5 px of 256)
-  double lr = 0.02;     // Adam's step on o (PoseNet's units: dof_scale radians per unit for most dofs)
+  int iterations = 300; // Adam steps per frame; 0: off (the network's output as it is)
+  double prior = 1e-4;  // weight of ‖o − o_net‖² / P against L_lm (in view widths²: about 1e-4 at 2.5 px of 256)
+  double lr = 0.05;     // Adam's step on o (PoseNet's units: dof_scale radians per unit for most dofs)
   int batch_size = 32;  // frames optimised together (independent: the losses are sums over frames)
   // Weight of the mean squared change (m²) of each keypoint's depth along the input camera's
   // axis, relative to MidHip, from the network's: the fit moves what the view sees and
   // leaves the depth no detection measures. 0: off.
-  double depth_prior = 0;
+  double depth_prior = 10;
 };
 
 struct PoseRefinementSummary {

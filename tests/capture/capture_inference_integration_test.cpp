@@ -370,7 +370,7 @@ TEST(Infer, TheDepthPriorLeavesTheDepthTheDetectionsCannotSee) {
     return z;
   };
   PoseRefinementConfig rc;
-  rc.iterations = 200, rc.prior = 0, rc.lr = 0.05;
+  rc.iterations = 200, rc.prior = 0, rc.lr = 0.05, rc.depth_prior = 0;
   std::vector<Eigen::VectorXd> free = rest, held = rest;
   const PoseRefinementSummary a = refine_pose_outputs(model, views, free, rc);
   rc.depth_prior = 100;
