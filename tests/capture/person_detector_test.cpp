@@ -204,7 +204,7 @@ TEST(PersonDetector, TheWildSequencesPhotosAreInNoTrainingShare) {
                         .string());
   ASSERT_FALSE(drawn.empty());
   int configs = 0;
-  for (const char* name : {"tiny", "default", "demo", "lifter", "paper", "default_detector"}) {
+  for (const char* name : {"tiny", "default", "default_arap_only", "demo", "paper", "default_detector"}) {
     const TrainingConfig c = load_training_config(weft::capture::testing::repo_file(std::string("configs/train/") + name + ".yaml"));
     if (c.stages[3].steps == 0) continue;
     ++configs;

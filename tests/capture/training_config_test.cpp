@@ -20,19 +20,34 @@ const char* kStages = "stages:\n  pose: {steps: 4, landmarks: 1}\n";
 }  // namespace
 
 TEST(TrainingConfig, ShippedConfigsParse) {
-  for (const char* name : {"tiny", "default", "demo", "lifter", "paper"}) {
+  for (const char* name : {"tiny", "default", "default_arap_only", "demo", "paper"}) {
     const TrainingConfig c = load_training_config(repo_file(std::string("configs/train/") + name + ".yaml"));
     EXPECT_GT(c.total_steps(), 0) << name;
     ASSERT_EQ(c.stages.size(), 4u);
     EXPECT_EQ(c.stages[0].kind, StageKind::pose);
-    EXPECT_GT(c.stages[2].steps, 0) << name << ": the physics stage";
+    EXPECT_GT(c.stages[1].steps + c.stages[2].steps, 0) << name << ": PADefNet's stages";
   }
-  // The lifter: PoseNet without images, trained on virtual poses too.
-  const TrainingConfig lifter = load_training_config(repo_file("configs/train/lifter.yaml"));
-  EXPECT_FALSE(lifter.network.image_input);
-  EXPECT_TRUE(lifter.network.keypoint_input);
-  EXPECT_TRUE(lifter.virtual_poses.enabled());
-  EXPECT_GT(lifter.stages[0].weights.virtual_landmarks, 0);
+  // The default: PoseNet a lifting network, trained on virtual poses too.
+  const TrainingConfig d = load_training_config(repo_file("configs/train/default.yaml"));
+  EXPECT_FALSE(d.network.image_input);
+  EXPECT_TRUE(d.network.keypoint_input);
+  EXPECT_TRUE(d.virtual_poses.enabled());
+  EXPECT_GT(d.stages[0].weights.virtual_landmarks, 0);
+  EXPECT_GT(d.stages[2].steps, 0) << "the physics stage";
+}
+
+// The DeepCap-like baseline differs from the default only in what follows the warm start:
+// the same PoseNet stage, and its warm start as long as the default's two later stages.
+TEST(TrainingConfig, TheArapOnlyBaselineMatchesTheDefaultsComputeAndPoseNet) {
+  const TrainingConfig d = load_training_config(repo_file("configs/train/default.yaml"));
+  const TrainingConfig a = load_training_config(repo_file("configs/train/default_arap_only.yaml"));
+  EXPECT_EQ(a.network.input_size, d.network.input_size);
+  EXPECT_EQ(a.network.image_input, d.network.image_input);
+  EXPECT_EQ(a.stages[0].steps, d.stages[0].steps);
+  EXPECT_EQ(a.stages[0].weights.virtual_landmarks, d.stages[0].weights.virtual_landmarks);
+  EXPECT_EQ(a.virtual_poses.enabled(), d.virtual_poses.enabled());
+  EXPECT_EQ(a.stages[1].steps, d.stages[1].steps + d.stages[2].steps);
+  EXPECT_EQ(a.stages[2].steps, 0);
 }
 
 // default_detector.yaml adds the person detector to a run of default.yaml (`weft train
