@@ -7,7 +7,7 @@
 #
 # Steps (each skipped when its output exists, so an interrupted run continues; measured
 # durations on 2 cores in docs/RESULTS.md):
-#  1. weft synth configs/synth/training_set.yaml            → OUT/training_set
+#  1. weft synth configs/synth/training_set_random_poses.yaml (the default's training set) → OUT/training_set
 #  2. weft train configs/train/default.yaml                 → OUT/physics
 #     weft train configs/train/default_arap_only.yaml       → OUT/arap_only
 #  3. weft synth configs/synth/unseen_studio.yaml (CMU 01_03, unseen) → OUT/unseen
@@ -32,7 +32,7 @@ timed() { local t0=$SECONDS; "$@"; log "  took $((SECONDS - t0)) s"; }
 data=${TRAINING_DATA:-$out/training_set}
 if [ ! -f "$data/dataset.yaml" ]; then
   log "1. training set → $data"
-  timed "$weft" synth --config "$root/configs/synth/training_set.yaml" --out "$data"
+  timed "$weft" synth --config "$root/configs/synth/training_set_random_poses.yaml" --out "$data"
 fi
 train() {  # name config
   local run=${!3:-$out/$1}

@@ -23,7 +23,7 @@
 #    fraction; force mean / per-frame p95 / max, Table 1; AMV/RV/SV IoU, Table 3; cloth
 #    error and Chamfer).
 # Every step is skipped when its output exists, so an interrupted run continues.
-# Environment: TRAINING_DATA (default: weft synth configs/synth/training_set.yaml →
+# Environment: TRAINING_DATA (default: weft synth configs/synth/training_set_random_poses.yaml →
 # OUT/training_set), UNSEEN (default: weft synth configs/synth/unseen_studio.yaml →
 # OUT/unseen), POSE_RUN, VIEW, SEEDS (default "1 2 3"). Needs a build (scripts/build.sh).
 set -euo pipefail
@@ -41,8 +41,8 @@ default="$root/configs/train/default.yaml"
 
 data=${TRAINING_DATA:-$out/training_set}
 if [ ! -f "$data/dataset.yaml" ]; then
-  log "synth: configs/synth/training_set.yaml → $data"
-  "$weft" synth --config "$root/configs/synth/training_set.yaml" --out "$data" >"$out/training_set.log" 2>&1
+  log "synth: configs/synth/training_set_random_poses.yaml (the default's training set) → $data"
+  "$weft" synth --config "$root/configs/synth/training_set_random_poses.yaml" --out "$data" >"$out/training_set.log" 2>&1
 fi
 unseen=${UNSEEN:-$out/unseen}
 if [ ! -f "$unseen/dataset.yaml" ]; then
@@ -55,7 +55,8 @@ fi
 stage_config() {
   local name=$1 seed=$2 keep=$3
   shift 3
-  local args=(-e "s/^seed: .*/seed: $seed/")
+  # default.yaml's paths are relative to configs/train; the written config lives elsewhere.
+  local args=(-e "s/^seed: .*/seed: $seed/" -e "s|\.\./motions/|$root/configs/motions/|" -e "s|\.\./retarget/|$root/configs/retarget/|")
   for stage in pose warmup physics; do
     [ "$stage" = "$keep" ] || args+=(-e "/^  $stage:/s/steps: [0-9]*/steps: 0/")
   done
