@@ -112,16 +112,9 @@ std::string adaptation_config(const ModelFolder& model, int iterations) {
       "# `weft adapt` of {}: both networks refined on the test sequence with one camera's\n"
       "# losses (capture/adaptation/domain_adaptation.h); generated from the model's config.\n"
       "seed: {}\n"
-      "network: {{backbone: {}, input_size: {}, margin: {}, dof_scale: {}, angle_scale: {}, translation_scale_m: {}, "
-      "keypoint_input: {}{}}}\n"
+      "network: {}\n"  // every key, the detector's included (carried over; the adaptation does not train it)
       "stages:\n",
-      model.dir, c.seed, c.network.backbone, c.network.input_size, c.network.margin, c.network.dof_scale,
-      c.network.angle_scale, c.network.translation_scale_m, c.network.keypoint_input,
-      // The detector is carried over as it is (the adaptation does not train it).
-      c.network.detector.enabled
-          ? fmt::format(", detector: {{input_size: {}, width: {}, margin: {}, sigma_px: {}}}", c.network.detector.input_size,
-                        c.network.detector.width, c.network.detector.margin, c.network.detector.sigma_px)
-          : std::string());
+      model.dir, c.seed, network_config_yaml(c.network));
   LossWeights pose_weights;
   pose_weights.landmarks = c.stages[0].weights.landmarks > 0 ? c.stages[0].weights.landmarks : 1;
   y += stage_line("pose", iterations, c.stages[0], pose_weights);

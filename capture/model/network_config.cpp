@@ -1,5 +1,7 @@
 #include "capture/model/network_config.h"
 
+#include <spdlog/fmt/fmt.h>
+
 namespace weft::capture {
 
 void parse_network_config(const StrictYaml& y, const YAML::Node& n, NetworkConfig& c) {
@@ -33,6 +35,18 @@ void parse_network_config(const StrictYaml& y, const YAML::Node& n, NetworkConfi
     if (c.backbone != "resnet18" && c.backbone != "resnet34" && c.backbone != "resnet50")
       y.fail_at(n["backbone"], "network.backbone", "expected resnet18, resnet34 or resnet50, found '" + c.backbone + "'");
   }
+}
+
+std::string network_config_yaml(const NetworkConfig& c) {
+  std::string y = fmt::format(
+      "{{backbone: {}, input_size: {}, margin: {}, dof_scale: {}, angle_scale: {}, translation_scale_m: {}, "
+      "keypoint_input: {}, image_input: {}, lift_width: {}, lift_layers: {}",
+      c.backbone, c.input_size, c.margin, c.dof_scale, c.angle_scale, c.translation_scale_m, c.keypoint_input,
+      c.image_input, c.lift_width, c.lift_layers);
+  if (c.detector.enabled)
+    y += fmt::format(", detector: {{input_size: {}, width: {}, margin: {}, sigma_px: {}}}", c.detector.input_size,
+                     c.detector.width, c.detector.margin, c.detector.sigma_px);
+  return y + "}";
 }
 
 }  // namespace weft::capture

@@ -37,4 +37,9 @@ struct NetworkConfig {
 // file, the line and the key (network.*).
 void parse_network_config(const StrictYaml& yaml, const YAML::Node& n, NetworkConfig& c);
 
+// The `network` section as a one-line YAML flow map with every key, so that a config
+// written from it (weft adapt's) rebuilds the same networks: parse_network_config of it
+// gives `c` back (numbers in their shortest exact form).
+std::string network_config_yaml(const NetworkConfig& c);
+
 }  // namespace weft::capture

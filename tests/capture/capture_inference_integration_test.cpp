@@ -283,6 +283,47 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
   expect_error([&] { adapt_model(no_keypoints); }, {"--keypoints"});
 }
 
+// The adapted model rebuilds the model's networks: a lifting PoseNet (no image network,
+// its own branch shape) stays one. (weft adapt once wrote only some network keys, so a
+// lifter came back with an untrained image network beside its branch.)
+TEST(Adapt, KeepsTheModelsNetworks) {
+  const Fixture& f = fixture();
+  const fs::path lifter = infer_scratch_root() / "lifter_model";
+  fs::create_directories(lifter);
+  {
+    std::string config = weft::capture::testing::slurp(repo_file("configs/train/tiny.yaml"));
+    const std::string network = "network: {backbone: resnet18, input_size: 64}";
+    ASSERT_NE(config.find(network), std::string::npos);
+    config.replace(config.find(network), network.size(),
+                   "network: {backbone: resnet18, input_size: 64, keypoint_input: true, image_input: false, "
+                   "lift_width: 48, lift_layers: 3}");
+    std::ofstream(lifter / "config.yaml") << config;
+  }
+  write_model_folder(lifter.string(), (lifter / "config.yaml").string(), f.data.string());
+  const TrainingConfig cfg = load_training_config((lifter / "config.yaml").string());
+  const Character character = load_character((lifter / "character" / "character.yaml").string());
+  CaptureNetworks nets(character, cfg.network, cfg.seed);
+  weft::nn::save_weights((lifter / "model.safetensors").string(), nets);
+  const ModelFolder model = read_model_folder(lifter.string());
+  ASSERT_FALSE(model.network.image_input);
+  AdaptOptions o;
+  o.model = lifter.string();
+  o.input = (f.data / "images" / "cam05").string();
+  o.camera = (f.data / "cameras.yaml").string();
+  o.camera_name = "cam05";
+  o.keypoints = (f.data / "keypoints" / "cam05").string();
+  o.masks = (f.data / "masks" / "cam05").string();
+  o.iterations = 1;
+  o.out = (infer_scratch_root() / "lifter_adapted").string();
+  adapt_model(o);
+  const NetworkConfig adapted = read_model_folder(o.out).network;
+  EXPECT_FALSE(adapted.image_input);
+  EXPECT_TRUE(adapted.keypoint_input);
+  EXPECT_EQ(adapted.lift_width, 48);
+  EXPECT_EQ(adapted.lift_layers, 3);
+  EXPECT_EQ(network_config_yaml(adapted), network_config_yaml(model.network));
+}
+
 TEST(ModelFolder, CarriesTheSimulationOfItsDataset) {
   // model.yaml holds the training dataset's simulation section, which is the recipe's: the
   // folder needs neither the recipe nor the dataset to resolve collisions.

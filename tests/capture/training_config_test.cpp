@@ -175,6 +175,21 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   EXPECT_EQ(lift.network.lift_width, 1024);
   EXPECT_EQ(lift.network.lift_layers, 3);
   EXPECT_EQ(parse_training_config(std::string(kStages), "c.yaml").network.lift_width, 512);
+  // network_config_yaml writes every key: parsing it gives the same networks back.
+  NetworkConfig odd;
+  odd.backbone = "resnet34", odd.input_size = 96, odd.margin = 0.2, odd.dof_scale = 0.125, odd.angle_scale = 0.03,
+  odd.translation_scale_m = 0.02, odd.keypoint_input = true, odd.image_input = false, odd.lift_width = 100,
+  odd.lift_layers = 3;
+  odd.detector.enabled = true, odd.detector.input_size = 80, odd.detector.width = 12, odd.detector.margin = 0.3,
+  odd.detector.sigma_px = 2.5;
+  const NetworkConfig back =
+      parse_training_config(std::string(kStages) + "network: " + network_config_yaml(odd) + "\n", "c.yaml").network;
+  EXPECT_EQ(network_config_yaml(back), network_config_yaml(odd));
+  EXPECT_FALSE(back.image_input);
+  EXPECT_EQ(back.lift_width, 100);
+  EXPECT_DOUBLE_EQ(back.dof_scale, 0.125);
+  EXPECT_EQ(back.detector.input_size, 80);
+  EXPECT_DOUBLE_EQ(back.detector.sigma_px, 2.5);
   expect_error([] { parse_training_config(std::string(kStages) + "network: {lift_layers: 0}\n", "c.yaml"); },
                {"c.yaml:3", "network.lift_layers"});
   expect_error([] { parse_training_config(std::string(kStages) + "network: {keypoint_input: maybe}\n", "c.yaml"); },
