@@ -17,6 +17,9 @@
 #include "capture/character/skeletool_io.h"
 #include "capture/dataset/synthetic_dataset.h"
 #include "capture/io/camera.h"
+#include "capture/render/keypoint_visibility.h"
+#include "capture/render/renderer.h"
+#include "geometry/mesh_io.h"
 #include "graph/error.h"
 
 namespace weft::capture {
@@ -41,6 +44,40 @@ std::vector<double> pooled(const std::array<std::vector<double>, kBody25Count>& 
 }
 
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+// The entries of `values` whose `keep` flag is set.
+std::vector<double> kept(const std::vector<double>& values, const std::vector<char>& keep) {
+  std::vector<double> out;
+  for (size_t i = 0; i < values.size(); ++i)
+    if (keep[i]) out.push_back(values[i]);
+  return out;
+}
+
+// Over all keypoints, the entries whose keypoint the camera sees.
+std::pair<std::vector<double>, std::vector<double>> visible_errors(const DetectionAccuracy& a) {
+  std::vector<double> errors, thresholds;
+  for (int m = 0; m < kBody25Count; ++m) {
+    const auto e = kept(a.truth_error_px[m], a.truth_visible[m]), t = kept(a.truth_threshold_px[m], a.truth_visible[m]);
+    errors.insert(errors.end(), e.begin(), e.end());
+    thresholds.insert(thresholds.end(), t.begin(), t.end());
+  }
+  return {errors, thresholds};
+}
+
+// The depth of the true body (posed by the dataset's motion) and, when the dataset has it,
+// the true garment of frame f, as the studio rendered them.
+cv::Mat true_depth(const DetectionTruth& truth, const Camera& camera, int f, const Vertices& body) {
+  std::vector<RenderMesh> meshes{{&truth.character.body.mesh, &body, 1}};
+  Vertices cloth;
+  const fs::path cloth_path = fs::path(truth.info.dir) / "gt" / fmt::format("cloth_{:04d}.ply", f);
+  if (truth.character.has_cloth() && fs::exists(cloth_path)) {
+    cloth = read_ply(cloth_path.string()).V;
+    WEFT_CHECK(cloth.rows() == truth.character.cloth->mesh.V.rows(), cloth_path.string(), ": ", cloth.rows(),
+               " vertices, the character's garment has ", truth.character.cloth->mesh.V.rows());
+    meshes.push_back({&truth.character.cloth->mesh, &cloth, 2});
+  }
+  return render(camera, meshes).depth;
+}
 }  // namespace
 
 double mask_iou(const cv::Mat& a, const cv::Mat& b) {
@@ -120,15 +157,19 @@ DetectionAccuracy measure_detections(const std::string& detections, const Detect
 
     WEFT_CHECK(f < truth.motion.num_frames(), truth.motion_path, ": ", truth.motion.num_frames(),
                " frames, the dataset has frame ", f);
-    const Vertices body25 = pose_character(truth.character, truth.motion.dofs.row(f).transpose()).body25;
+    const PosedCharacter posed = pose_character(truth.character, truth.motion.dofs.row(f).transpose());
+    const Vertices& body25 = posed.body25;
     const auto cam = truth.cameras.find(dataset_camera_name(info, f, view));
     WEFT_CHECK(cam != truth.cameras.end(), truth.cameras_path, ": no camera '", dataset_camera_name(info, f, view), "'");
+    const auto seen = keypoint_visibility(cam->second, body25, true_depth(truth, cam->second, f, posed.body),
+                                          kOcclusionDepthToleranceM / info.metres_per_unit);
     const Body25 labels = read_dataset_keypoints(dataset_keypoints_path(info, f, view));
     for (int m = 0; m < kBody25Count; ++m) {
       if (body25.row(m).allFinite()) {
         const Eigen::Vector2d p = cam->second.project(body25.row(m).transpose());
         a.truth_error_px[m].push_back(keypoint_error(predicted, m, p.x(), p.y()));
         a.truth_threshold_px[m].push_back(threshold);
+        a.truth_visible[m].push_back(seen[m] == KeypointVisibility::visible);
       }
       if (labels(m, 2) > 0) {
         a.label_error_px[m].push_back(keypoint_error(predicted, m, labels(m, 0), labels(m, 1)));
@@ -173,6 +214,22 @@ std::string detection_accuracy_json(const DetectionAccuracy& a) {
     return s;
   };
   j["against_truth"] = summary(a.truth_error_px, a.truth_threshold_px);
+  {
+    const auto [errors, thresholds] = visible_errors(a);
+    nlohmann::json v = {{"median_px", number(median_of(errors))},
+                        {"pck", number(fraction_within(errors, thresholds))},
+                        {"keypoints", errors.size()}};
+    nlohmann::json per = nlohmann::json::object();
+    for (int m = 0; m < kBody25Count; ++m) {
+      const auto e = kept(a.truth_error_px[m], a.truth_visible[m]);
+      if (!e.empty())
+        per[kBody25Names[m]] = {{"median_px", number(median_of(e))},
+                                {"pck", number(fraction_within(e, kept(a.truth_threshold_px[m], a.truth_visible[m])))},
+                                {"count", e.size()}};
+    }
+    v["per_keypoint"] = per;
+    j["against_truth"]["visible"] = v;
+  }
   j["against_labels"] = summary(a.label_error_px, a.label_threshold_px);
   return j.dump(1) + "\n";
 }
@@ -190,6 +247,10 @@ DetectionFigures detection_figures(const DetectionAccuracy& a) {
   d.label_median_px = median_of(labels);
   d.label_pck = fraction_within(labels, all(a.label_threshold_px));
   d.truth_keypoints = truth.size();
+  const auto [visible, visible_thresholds] = visible_errors(a);
+  d.visible_median_px = median_of(visible);
+  d.visible_pck = fraction_within(visible, visible_thresholds);
+  d.visible_keypoints = visible.size();
   return d;
 }
 
@@ -202,19 +263,26 @@ std::vector<std::string> detection_summary_lines(const DetectionAccuracy& a) {
                             "against the dataset's detections: median {:.2f} px, PCK {:.1f} %",
                             d.truth_median_px, 100 * a.pck_fraction, 100 * d.truth_pck, d.truth_keypoints,
                             d.label_median_px, 100 * d.label_pck));
+  out.push_back(fmt::format("the true keypoints the camera sees (not hidden behind the body): median {:.2f} px, "
+                            "PCK@{:.0f}% {:.1f} % ({} of {} keypoints)",
+                            d.visible_median_px, 100 * a.pck_fraction, 100 * d.visible_pck, d.visible_keypoints,
+                            d.truth_keypoints));
   return out;
 }
 
 std::vector<std::string> detection_accuracy_lines(const DetectionAccuracy& a) {
   std::vector<std::string> out = detection_summary_lines(a);
-  out.push_back("keypoint        truth median px  PCK %   labels median px  PCK %");
+  out.push_back("keypoint        truth median px  PCK %   labels median px  PCK %   visible PCK %  (of)");
   for (int m = 0; m < kBody25Count; ++m) {
     if (a.truth_error_px[m].empty() && a.label_error_px[m].empty()) continue;
-    out.push_back(fmt::format("{:<14} {:>16.2f} {:>6.1f} {:>18.2f} {:>6.1f}", kBody25Names[m],
+    const auto visible = kept(a.truth_error_px[m], a.truth_visible[m]);
+    out.push_back(fmt::format("{:<14} {:>16.2f} {:>6.1f} {:>18.2f} {:>6.1f} {:>15.1f} {:>5}", kBody25Names[m],
                               median_of(a.truth_error_px[m]),
                               100 * fraction_within(a.truth_error_px[m], a.truth_threshold_px[m]),
                               median_of(a.label_error_px[m]),
-                              100 * fraction_within(a.label_error_px[m], a.label_threshold_px[m])));
+                              100 * fraction_within(a.label_error_px[m], a.label_threshold_px[m]),
+                              100 * fraction_within(visible, kept(a.truth_threshold_px[m], a.truth_visible[m])),
+                              visible.size()));
   }
   return out;
 }

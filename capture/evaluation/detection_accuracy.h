@@ -6,7 +6,10 @@
 // detections (the labels the detector was trained on). PCK counts a keypoint correct
 // within 5 % of the person's height (the true mask's box height in that frame).
 // A keypoint the prediction leaves undetected while the truth has it counts as wrong at
-// any threshold and as an infinite error (medians include it).
+// any threshold and as an infinite error (medians include it). Every true keypoint in the
+// image counts, those hidden behind the body too; the figures over the visible ones alone
+// (the studio's occlusion rule, capture/render/keypoint_visibility.h, on a depth render of
+// the true body and garment) are given beside them.
 #include <array>
 #include <map>
 #include <string>
@@ -36,6 +39,7 @@ struct DetectionAccuracy {
   // Per keypoint (BODY_25 order), one entry per frame where the reference has it: the
   // error in frame pixels and 5 % of the person's height there.
   std::array<std::vector<double>, kBody25Count> truth_error_px, truth_threshold_px;
+  std::array<std::vector<char>, kBody25Count> truth_visible;  // beside truth_error_px: not occluded
   std::array<std::vector<double>, kBody25Count> label_error_px, label_threshold_px;
   double pck_fraction = 0.05;
 };
@@ -65,6 +69,8 @@ struct DetectionFigures {
   double truth_median_px = 0, truth_pck = 0;  // against the true keypoints
   double label_median_px = 0, label_pck = 0;  // against the dataset's detections
   size_t truth_keypoints = 0;
+  double visible_median_px = 0, visible_pck = 0;  // against the true keypoints the camera sees
+  size_t visible_keypoints = 0;
 };
 DetectionFigures detection_figures(const DetectionAccuracy& a);
 

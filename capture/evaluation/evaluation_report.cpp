@@ -305,6 +305,9 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
     drow(fmt::format("keypoint error against the true keypoints, median ({} keypoints)", d.truth_keypoints),
          num(d.truth_median_px, 2), "px");
     drow("keypoints within the PCK threshold of the truth", num(100 * d.truth_pck, 1), "%");
+    drow(fmt::format("the same over the keypoints the camera sees, not hidden behind the body ({} keypoints)",
+                     d.visible_keypoints),
+         num(100 * d.visible_pck, 1), "%");
     drow("keypoint error against the dataset's own detections, median", num(d.label_median_px, 2), "px");
     h += "</table>\n";
   }

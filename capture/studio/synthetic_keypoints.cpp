@@ -15,10 +15,6 @@ void check_keypoints(const Vertices& body25_world, const char* what) {
     fail(what, ": expected 25×3 BODY_25 world positions, got ", body25_world.rows(), "×", body25_world.cols());
 }
 
-bool in_image(const Camera& camera, const Eigen::Vector2d& uv) {
-  return uv.x() >= -0.5 && uv.x() < camera.width - 0.5 && uv.y() >= -0.5 && uv.y() < camera.height - 0.5;
-}
-
 bool mapped(const Vertices& body25_world, int k) { return body25_world.row(k).allFinite(); }
 
 // How much of a left/right pair's length survives projection: 1 when the segment between
@@ -56,7 +52,7 @@ Body25 noisy_keypoints(const Camera& camera, const Body25& clean,
     if (drop < (occluded ? config.occluded_dropout : config.dropout)) continue;
     const double sigma = sigma_px(k);
     const Eigen::Vector2d uv(clean(k, 0) + sigma * noise_x, clean(k, 1) + sigma * noise_y);
-    if (!in_image(camera, uv)) continue;  // a detector reports nothing outside the frame
+    if (!in_camera_image(camera, uv)) continue;  // a detector reports nothing outside the frame
     const double base = occluded ? config.occluded_confidence : config.visible_confidence;
     const double error_sigmas = sigma > 0 ? std::hypot(noise_x, noise_y) : 0.0;
     out.row(k) << uv.x(), uv.y(), std::clamp(confidence(base, error_sigmas, jitter), 1e-3, 1.0);
@@ -181,7 +177,7 @@ Body25 project_keypoints(const Camera& camera, const Vertices& body25_world) {
     const Eigen::Vector3d X = body25_world.row(k).transpose();
     if (!(camera.depth(X) > 0)) continue;
     const Eigen::Vector2d uv = camera.project(X);
-    if (!in_image(camera, uv)) continue;
+    if (!in_camera_image(camera, uv)) continue;
     out.row(k) << uv.x(), uv.y(), 1.0;
   }
   return out;
@@ -192,32 +188,7 @@ std::array<KeypointVisibility, kBody25Count> keypoint_visibility(const Camera& c
                                                                  const KeypointNoiseConfig& config) {
   check_keypoints(body25_world, "keypoint_visibility");
   validate_keypoint_noise(config, "keypoint noise config");
-  if (!depth.empty() && (depth.type() != CV_32FC1 || depth.cols != camera.width || depth.rows != camera.height))
-    fail("keypoint_visibility: camera '", camera.name, "': expected a CV_32FC1 depth image of ", camera.width, "x",
-         camera.height, " (render()'s depth), got type ", depth.type(), " of ", depth.cols, "x", depth.rows);
-  const double tolerance = config.depth_tolerance_m / config.metres_per_unit;  // world units
-  std::array<KeypointVisibility, kBody25Count> out;
-  for (int k = 0; k < kBody25Count; ++k) {
-    if (!mapped(body25_world, k)) {
-      out[k] = KeypointVisibility::unmapped;
-      continue;
-    }
-    const Eigen::Vector3d X = body25_world.row(k).transpose();
-    const double z = camera.depth(X);
-    const Eigen::Vector2d uv = camera.project(X);
-    if (!(z > 0) || !in_image(camera, uv)) {
-      out[k] = KeypointVisibility::outside;
-      continue;
-    }
-    out[k] = KeypointVisibility::visible;
-    if (depth.empty()) continue;
-    // The pixel whose centre is nearest: pixel (x, y) covers [x − ½, x + ½).
-    const int x = std::clamp(static_cast<int>(std::floor(uv.x() + 0.5)), 0, camera.width - 1);
-    const int y = std::clamp(static_cast<int>(std::floor(uv.y() + 0.5)), 0, camera.height - 1);
-    const double surface = depth.at<float>(y, x);
-    if (surface > 0 && z - surface > tolerance) out[k] = KeypointVisibility::occluded;
-  }
-  return out;
+  return keypoint_visibility(camera, body25_world, depth, config.depth_tolerance_m / config.metres_per_unit);
 }
 
 Body25 synthesize_keypoints(const Camera& camera, const Vertices& body25_world, const cv::Mat& depth,

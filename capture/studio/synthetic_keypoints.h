@@ -8,17 +8,11 @@
 //   keypoint as in COCO's annotator spread; left/right swaps, more often in side views;
 //   more dropouts under occlusion; a confidence that falls with the drawn error.
 //
-// Occlusion. Keypoints are joint centres and sit inside the body, so the rendered
-// surface at a keypoint's pixel is always somewhat in front of it. A keypoint counts as
-// occluded when that surface is more than `depth_tolerance_m` (about the half-thickness of
-// the torso, 0.15 m) in front of it: a joint facing the camera has only its own flesh in
-// front and stays visible, a joint behind the torso, the head or the other leg has a whole
-// body part in front and is occluded. On the default character in its rest pose, seen by
-// the 8-view rig, joints facing a camera are at most 0.13 m under the surface, the far
+// Occlusion: the rule of capture/render/keypoint_visibility.h with the config's
+// depth_tolerance_m (0.15 m). On the default character in its rest pose, seen by the
+// 8-view rig, joints facing a camera are at most 0.13 m under the surface, the far
 // shoulder, hip and knee of a side view 0.26–0.71 m, the nose from behind 0.18 m; the
-// pelvis centre seen from the side (0.16 m) counts as hidden. Where nothing is rendered
-// at the pixel (depth 0, e.g. just outside a thin limb's silhouette) the keypoint is
-// visible.
+// pelvis centre seen from the side (0.16 m) counts as hidden.
 #include <opencv2/core.hpp>
 
 #include <array>
@@ -30,6 +24,7 @@
 #include "geometry/mesh.h"
 #include "capture/io/openpose.h"
 #include "capture/io/portable_random.h"  // mix_seed(dataset seed, view, frame)
+#include "capture/render/keypoint_visibility.h"
 
 namespace weft::capture {
 
@@ -43,7 +38,7 @@ struct KeypointNoiseConfig {
   double visible_confidence = 0.9;     // reported confidence of a visible keypoint (openpose: at zero error)
   double occluded_confidence = 0.3;    // … of an occluded one
   double confidence_jitter = 0.05;     // confidences vary uniformly by ± this (kept in (0, 1])
-  double depth_tolerance_m = 0.15;     // occlusion rule (see above), metres
+  double depth_tolerance_m = kOcclusionDepthToleranceM;  // occlusion rule (see above), metres
   double metres_per_unit = 1.0;        // character units: 1 (metres), 0.001 (millimetres)
 
   // openpose only. Keypoint k's error is Gaussian with an rms length (Euclidean, pixels) of
@@ -77,22 +72,16 @@ extern const std::array<std::pair<int, int>, 11> kBody25LeftRightPairs;
 // project into the image (0 with fewer than two).
 double person_scale_px(const Camera& camera, const Vertices& body25_world, const cv::Mat& depth);
 
-enum class KeypointVisibility {
-  unmapped,  // the character has no such keypoint (a NaN row)
-  outside,   // behind the camera or projects outside the image
-  occluded,  // in the image, hidden behind the body
-  visible,
-};
-
 // Noise-free projection: pixel coordinates and confidence 1 for mapped keypoints in front
 // of the camera whose pixel lies in the image ([−½, width − ½) × [−½, height − ½), the
 // renderer's pixel convention); 0, 0, 0 otherwise. `body25_world` is 25×3 (world units),
 // NaN rows for unmapped keypoints.
 Body25 project_keypoints(const Camera& camera, const Vertices& body25_world);
 
-// Classifies each keypoint. `depth` is render()'s depth for this camera (CV_32FC1, camera
-// z in world units, 0 = background, the camera's size); an empty Mat skips the occlusion
-// test (every keypoint in the image is visible).
+// Classifies each keypoint by keypoint_visibility() with the config's depth_tolerance_m.
+// `depth` is render()'s depth for this camera (CV_32FC1, camera z in world units, 0 =
+// background, the camera's size); an empty Mat skips the occlusion test (every keypoint in
+// the image is visible).
 std::array<KeypointVisibility, kBody25Count> keypoint_visibility(const Camera& camera, const Vertices& body25_world,
                                                                  const cv::Mat& depth,
                                                                  const KeypointNoiseConfig& config);
