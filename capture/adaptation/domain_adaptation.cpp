@@ -120,9 +120,7 @@ std::string adaptation_config(const ModelFolder& model, int iterations) {
   y += stage_line("pose", iterations, c.stages[0], pose_weights);
   y += stage_line("warmup", physics ? 0 : iterations, c.stages[1], c.stages[1].weights);
   y += stage_line("physics", physics ? iterations : 0, c.stages[2], c.stages[2].weights);
-  if (physics)
-    y += fmt::format("physics: {{window_frames: {}, max_iterations: {}, tolerance: {}}}\n", c.physics.window_frames,
-                     c.physics.max_iterations, c.physics.tolerance);
+  if (physics) y += "physics: " + physics_config_yaml(c.physics) + "\n";  // every key: the model's simulation loss
   y += fmt::format(
       "silhouette_size: {}\nloader_threads: {}\nlog_every: {}\nvalidate_every: 0\nvalidation_samples: 1\n"
       "checkpoint_every: {}\nkeep_checkpoints: 2\n",

@@ -1,5 +1,7 @@
 #include "capture/training/training_config.h"
 
+#include <fmt/format.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -178,6 +180,15 @@ TrainingConfig parse_training_config(const std::string& text, const std::string&
                 "dataset without that section with weft synth");
   }
   return c;
+}
+
+std::string physics_config_yaml(const PhysicsConfig& c) {
+  // fmt's {} prints the shortest form that reads back exactly.
+  return fmt::format(
+      "{{window_frames: {}, max_iterations: {}, tolerance: {}, ray_stiffness: {}, ray_max_pixels: {}, "
+      "resolve_start: {}, freeze_batch_norm: {}}}",
+      c.window_frames, c.max_iterations, c.tolerance, c.ray_stiffness, c.ray_max_pixels, c.resolve_start,
+      c.freeze_batch_norm);
 }
 
 TrainingConfig load_training_config(const std::string& path) {

@@ -126,6 +126,9 @@ struct TrainingConfig {
 };
 
 TrainingConfig load_training_config(const std::string& path);
+// The physics section as YAML flow text, every key written: parse_training_config reads it
+// back to the same settings (weft adapt writes the model's own into its config).
+std::string physics_config_yaml(const PhysicsConfig& c);
 // The training config a model folder was trained with (its config.yaml, whose relative
 // paths resolve against the folder it came from).
 TrainingConfig model_training_config(const ModelFolder& model);

@@ -285,7 +285,8 @@ TEST(Adapt, RefinesTheModelOnTheSequenceAndResumesExactly) {
 
 // The adapted model rebuilds the model's networks: a lifting PoseNet (no image network,
 // its own branch shape) stays one. (weft adapt once wrote only some network keys, so a
-// lifter came back with an untrained image network beside its branch.)
+// lifter came back with an untrained image network beside its branch.) Its simulation loss
+// keeps the model's settings too (it once kept only three of them).
 TEST(Adapt, KeepsTheModelsNetworks) {
   const Fixture& f = fixture();
   const fs::path lifter = infer_scratch_root() / "lifter_model";
@@ -297,6 +298,11 @@ TEST(Adapt, KeepsTheModelsNetworks) {
     config.replace(config.find(network), network.size(),
                    "network: {backbone: resnet18, input_size: 64, keypoint_input: true, image_input: false, "
                    "lift_width: 48, lift_layers: 3}");
+    const std::string physics = "physics: {window_frames: 3, max_iterations: 60, tolerance: 1.0e-2}";
+    ASSERT_NE(config.find(physics), std::string::npos);
+    config.replace(config.find(physics), physics.size(),
+                   "physics: {window_frames: 3, max_iterations: 60, tolerance: 1.0e-2, ray_stiffness: 40, "
+                   "ray_max_pixels: 4, freeze_batch_norm: false}");
     std::ofstream(lifter / "config.yaml") << config;
   }
   write_model_folder(lifter.string(), (lifter / "config.yaml").string(), f.data.string());
@@ -322,6 +328,11 @@ TEST(Adapt, KeepsTheModelsNetworks) {
   EXPECT_EQ(adapted.lift_width, 48);
   EXPECT_EQ(adapted.lift_layers, 3);
   EXPECT_EQ(network_config_yaml(adapted), network_config_yaml(model.network));
+  const PhysicsConfig adapted_physics = load_training_config((fs::path(o.out) / "config.yaml").string()).physics;
+  EXPECT_EQ(adapted_physics.ray_stiffness, 40);
+  EXPECT_EQ(adapted_physics.ray_max_pixels, 4);
+  EXPECT_FALSE(adapted_physics.freeze_batch_norm);
+  EXPECT_EQ(physics_config_yaml(adapted_physics), physics_config_yaml(cfg.physics));
 }
 
 TEST(ModelFolder, CarriesTheSimulationOfItsDataset) {

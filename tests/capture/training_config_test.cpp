@@ -190,6 +190,16 @@ TEST(TrainingConfig, ErrorsNameTheFileTheLineAndTheKey) {
   EXPECT_DOUBLE_EQ(back.dof_scale, 0.125);
   EXPECT_EQ(back.detector.input_size, 80);
   EXPECT_DOUBLE_EQ(back.detector.sigma_px, 2.5);
+  // physics_config_yaml writes every key: parsing it gives the same settings back.
+  PhysicsConfig physics;
+  physics.window_frames = 3, physics.max_iterations = 77, physics.tolerance = 3e-3, physics.ray_stiffness = 0,
+  physics.ray_max_pixels = 4.5, physics.resolve_start = false, physics.freeze_batch_norm = false;
+  const PhysicsConfig physics_back =
+      parse_training_config(std::string(kStages) + "physics: " + physics_config_yaml(physics) + "\n", "c.yaml").physics;
+  EXPECT_EQ(physics_config_yaml(physics_back), physics_config_yaml(physics));
+  EXPECT_EQ(physics_back.ray_stiffness, 0.0);
+  EXPECT_FALSE(physics_back.resolve_start);
+  EXPECT_DOUBLE_EQ(physics_back.tolerance, 3e-3);
   expect_error([] { parse_training_config(std::string(kStages) + "network: {lift_layers: 0}\n", "c.yaml"); },
                {"c.yaml:3", "network.lift_layers"});
   expect_error([] { parse_training_config(std::string(kStages) + "network: {keypoint_input: maybe}\n", "c.yaml"); },
