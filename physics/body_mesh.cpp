@@ -172,6 +172,19 @@ void BodyMesh::compute_normals() {
   }
   for (auto& n : vertex_normals_)
     if (n.norm() > 0) n.normalize();
+  // Folded: an incident face facing against the pseudo-normal, or incident faces facing so
+  // many ways that their unit normals' mean is shorter than ½ (a fold, a spike's tip).
+  folded_.assign(nv, 0);
+  std::vector<Eigen::Vector3d> normal_sum(nv, Eigen::Vector3d::Zero());
+  std::vector<int> incident(nv, 0);
+  for (int f : active_)
+    for (int v : faces_[f]) {
+      if (face_normals_[f].dot(vertex_normals_[v]) < 0) folded_[v] = 1;
+      normal_sum[v] += face_normals_[f];
+      ++incident[v];
+    }
+  for (int v = 0; v < nv; ++v)
+    if (incident[v] > 0 && normal_sum[v].norm() < 0.5 * incident[v]) folded_[v] = 1;
   for (int f : active_)
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d& s = edge_sum[face_edges_[f][k]];
@@ -242,7 +255,27 @@ ClosestPoint BodyMesh::signed_closest_point(const Eigen::Vector3d& x, const Face
   }
   const double unsigned_distance = std::sqrt(near.distance2);
   best.distance = (x - best.point).dot(best.normal) < 0 ? -unsigned_distance : unsigned_distance;
+  // On a folded surface the pseudo-normal's sign is not to be trusted (see the header).
+  if (best.distance < 0 && (folded_[t[0]] || folded_[t[1]] || folded_[t[2]]) && winding_number(x) < 0.5) {
+    best.distance = unsigned_distance;
+    best.normal = -best.normal;  // d = n·(x − p) inside a face, with d now > 0
+  }
   return best;
+}
+
+double BodyMesh::winding_number(const Eigen::Vector3d& x) const {
+  // Each triangle's signed solid angle Ω from x: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| +
+  // (b·c)|a| + (c·a)|b|), with a, b, c the corners relative to x.
+  double sum = 0;
+  for (const auto& t : faces_) {
+    const Eigen::Vector3d a = vertices_.row(t[0]).transpose() - x, b = vertices_.row(t[1]).transpose() - x,
+                          c = vertices_.row(t[2]).transpose() - x;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double numerator = a.dot(b.cross(c));
+    const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    sum += 2 * std::atan2(numerator, denominator);
+  }
+  return sum / (4 * M_PI);
 }
 
 template <class Accept>

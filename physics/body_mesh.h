@@ -54,6 +54,14 @@ class BodyMesh {
                                          const Eigen::Vector3d& facing, double max_cos) const;
   // Unit normal of face f.
   const Eigen::Vector3d& face_normal(int f) const { return face_normals_[f]; }
+  // The generalized winding number of the whole surface (every face, active or not) at x:
+  // the faces' signed solid angles seen from x over 4π (van Oosterom & Strackee's formula);
+  // 1 inside a closed outward-oriented mesh, 0 outside, ½ on it. O(faces).
+  double winding_number(const Eigen::Vector3d& x) const;
+  // Whether vertex v's surface is folded over: an active face at v faces against v's
+  // pseudo-normal, or the unit normals of its active faces average to shorter than ½
+  // (updated with the vertices).
+  bool folded(int v) const { return folded_[v] != 0; }
   // One active face near a point: the face's closest point to it, the feature of the face
   // that point lies on, and the squared distance (m²).
   struct FaceNear {
@@ -104,6 +112,7 @@ class BodyMesh {
   std::vector<int> active_;          // active face ids, reordered by the tree
   std::vector<Node> nodes_;
   std::vector<Eigen::Vector3d> face_normals_, vertex_normals_;
+  std::vector<char> folded_;  // per vertex, see folded()
   std::vector<std::array<Eigen::Vector3d, 3>> edge_normals_;  // per face, edge (k, k+1)
   std::vector<std::array<int, 3>> face_edges_;  // per active face, the id of edge (k, k+1)
   int num_edges_ = 0;

@@ -413,6 +413,57 @@ TEST(Energies, BodyMeshSignedDistance) {
   }
 }
 
+// The generalized winding number tells inside from outside, and the signed distance agrees
+// with it where the surface folds over (a skinned body at a far-bent joint): a sphere with one
+// vertex of its top ring pulled down through it and out of its bottom, a spike whose faces
+// face opposite ways. There the closest vertex's pseudo-normal said "inside" for points around
+// the spike's tip that lie outside the body.
+TEST(Energies, BodyMeshSignAgreesWithTheWindingNumberWhereTheSurfaceFolds) {
+  const BodyMesh sphere = testing::uv_sphere(Vec3(0, 1, 0), 0.3);
+  EXPECT_NEAR(sphere.winding_number(Vec3(0, 1, 0)), 1.0, 1e-9);
+  EXPECT_NEAR(sphere.winding_number(Vec3(0.1, 1.2, -0.05)), 1.0, 1e-9);
+  EXPECT_NEAR(sphere.winding_number(Vec3(0.5, 1, 0)), 0.0, 1e-9);
+  EXPECT_NEAR(sphere.winding_number(Vec3(0, 0.5, 0.2)), 0.0, 1e-9);
+
+  Eigen::MatrixX3d v = sphere.vertices();
+  const int spike = 1;  // a vertex of the first ring below the north pole
+  const Vec3 tip(0.02, 0.55, 0.01);  // 15 cm below the sphere's bottom
+  v.row(spike) = tip.transpose();
+  const BodyMesh folded(v, sphere.faces());
+  int folded_vertices = 0;
+  for (int k = 0; k < v.rows(); ++k) {
+    folded_vertices += folded.folded(k);
+    EXPECT_FALSE(sphere.folded(k)) << k;
+  }
+  EXPECT_TRUE(folded.folded(spike));
+  EXPECT_LE(folded_vertices, 8) << "the spike and its neighbours only";
+  // The tip's angle-weighted pseudo-normal, as the sign was taken before.
+  Vec3 pseudo = Vec3::Zero();
+  for (const auto& f : folded.faces())
+    for (int k = 0; k < 3; ++k)
+      if (f[k] == spike) {
+        const Vec3 a = v.row(f[k]).transpose(), b = v.row(f[(k + 1) % 3]).transpose(),
+                   c = v.row(f[(k + 2) % 3]).transpose();
+        const Vec3 n = (b - a).cross(c - a).normalized();
+        pseudo += std::acos(std::clamp((b - a).normalized().dot((c - a).normalized()), -1.0, 1.0)) * n;
+      }
+  pseudo.normalize();
+  int outside_but_pseudo_inside = 0, checked = 0;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 24; ++j) {
+      const double th = M_PI * (i + 0.5) / 12, ph = 2 * M_PI * j / 24;
+      const Vec3 x = tip + 0.02 * Vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+      const ClosestPoint c = folded.closest_point(x);
+      const bool inside = folded.winding_number(x) >= 0.5;
+      EXPECT_EQ(c.distance < 0, inside) << "x = " << x.transpose() << ", winding " << folded.winding_number(x);
+      EXPECT_NEAR(std::abs(c.distance), (x - c.point).norm(), 1e-12);
+      ++checked;
+      if ((c.point - tip).norm() < 1e-12 && !inside && (x - tip).dot(pseudo) < 0) ++outside_but_pseudo_inside;
+    }
+  EXPECT_GT(outside_but_pseudo_inside, 0) << "the case the winding number decides: outside, behind the tip's pseudo-normal";
+  EXPECT_EQ(checked, 288);
+}
+
 // The smooth creases' query (one walk of the tree) gives closest_point's answer and exactly
 // the faces within the band, each with its own closest point, as brute force over all faces.
 TEST(Energies, BodyMeshClosestPointAndFacesWithinTheBandMatchBruteForce) {
