@@ -78,7 +78,8 @@ RandomMotionConfig::RandomMotionConfig() {
 
 const std::vector<const char*>& random_motion_keys() {
   static const std::vector<const char*> keys{"seed",   "key_interval", "hold_probability", "max_speed", "turn",
-                                             "step",   "crouch",       "pelvis",          "joints"};
+                                             "step",   "crouch",       "pelvis",          "joints",
+                                             "raise"};
   return keys;
 }
 
@@ -109,6 +110,13 @@ RandomMotionConfig parse_random_motion_config(const StrictYaml& y, const YAML::N
     y.check_keys(s, w + "crouch", {"probability", "depth"});
     if (s["probability"]) c.crouch_probability = probability(y, s["probability"], w + "crouch.probability");
     if (s["depth"]) c.crouch_depth_m = parse_range(y, s["depth"], w + "crouch.depth", 0, 0.5, false);
+  }
+  if (const YAML::Node s = n["raise"]) {
+    y.check_keys(s, w + "raise", {"probability", "hip_flex", "knee", "abduction"});
+    if (s["probability"]) c.raise_probability = probability(y, s["probability"], w + "raise.probability");
+    if (s["hip_flex"]) c.raise_hip_flex_deg = parse_range(y, s["hip_flex"], w + "raise.hip_flex", -30, 130, false);
+    if (s["knee"]) c.raise_knee_deg = parse_range(y, s["knee"], w + "raise.knee", 0, 150, false);
+    if (s["abduction"]) c.raise_abduction_deg = parse_range(y, s["abduction"], w + "raise.abduction", 0, 50, false);
   }
   if (const YAML::Node s = n["pelvis"]) {
     y.check_keys(s, w + "pelvis", {"pitch"});
@@ -181,6 +189,8 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
   std::vector<std::vector<double>> angles(kRandomJointCount * 2 * 3, std::vector<double>(K, 0.0));
   std::vector<double> heading(K, 0.0), knee(K, 0.0), pitch(K, 0.0);
   PortableRandom pelvis_rng(c.seed ^ 0x9e3779b97f4a7c15ull);  // its own stream: see pelvis_pitch_deg
+  PortableRandom raise_rng(c.seed ^ 0x7261697365ull);         // its own stream: see raise_probability
+  std::vector<std::vector<double>> raise(6, std::vector<double>(K, 0.0));
   double target = 0;  // heading target (degrees, relative to the start)
   enum Group { torso, neck_head, left_arm, right_arm, kGroups };
   auto group_of = [](int j, int side) {
@@ -223,7 +233,33 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
     heading[k] = heading[k - 1] + std::clamp(target - heading[k - 1], -c.max_turn_deg, c.max_turn_deg);
     const double u_crouch = rng.uniform(), depth = rng.uniform(c.crouch_depth_m.lo, c.crouch_depth_m.hi);
     knee[k] = k + 1 < K && u_crouch < c.crouch_probability ? knee_for_drop(depth) : 0.0;
+
+    // A raised leg (its own stream, a fixed number of draws per key). It may start only
+    // after a key without a crouch, and a key with a leg up has no crouch (nor the key after
+    // it), so the two never overlap; one leg goes up only while the other is down.
+    const double u_raise = raise_rng.uniform(), side_draw = raise_rng.uniform();
+    const double raise_drawn[3] = {raise_rng.uniform(c.raise_hip_flex_deg.lo, c.raise_hip_flex_deg.hi),
+                                   raise_rng.uniform(c.raise_knee_deg.lo, c.raise_knee_deg.hi),
+                                   raise_rng.uniform(c.raise_abduction_deg.lo, c.raise_abduction_deg.hi)};
+    if (c.raise_probability > 0) {
+      auto up = [&](int side, size_t key) {
+        for (int a = 0; a < 3; ++a)
+          if (raise[side * 3 + a][key] != 0) return true;
+        return false;
+      };
+      const int up_before = up(0, k - 1) ? 0 : up(1, k - 1) ? 1 : -1;
+      if (up_before >= 0) knee[k] = 0;
+      int side = u_raise < c.raise_probability && knee[k - 1] == 0 ? (side_draw < 0.5 ? 0 : 1) : -1;
+      if (up_before >= 0 && side != up_before) side = -1;  // the other leg comes down first
+      for (int s = 0; s < 2; ++s)
+        for (int a = 0; a < 3; ++a) {
+          std::vector<double>& v = raise[s * 3 + a];
+          v[k] = next_key(v[k - 1], s == side ? raise_drawn[a] : 0.0, false);
+        }
+      if (up(0, k) || up(1, k)) knee[k] = 0;
+    }
   }
+  for (const auto& v : raise) raise_.push_back(curve(v));
   for (const auto& v : angles) angles_.push_back(curve(v));
   heading_ = curve(heading);
   crouch_knee_ = curve(knee);
@@ -235,7 +271,9 @@ RandomMotion::RandomMotion(const RandomMotionConfig& c, double duration_s) : dur
   for (size_t k = 0; k + 1 < K; ++k) {
     const double h = times_[k + 1] - times_[k];
     const int n = std::max(1, static_cast<int>(h * c.step_frequency_hz));  // no step shorter than 1/frequency
-    const bool step = rng.uniform() < c.step_probability && knee[k] == 0 && knee[k + 1] == 0;
+    bool raised = false;  // a leg up at either end: no step in between
+    for (const std::vector<double>& v : raise) raised = raised || v[k] != 0 || v[k + 1] != 0;
+    const bool step = rng.uniform() < c.step_probability && knee[k] == 0 && knee[k + 1] == 0 && !raised;
     const int first_side = rng.uniform() < 0.5 ? 0 : 1;
     for (int i = 0; i < n; ++i) {
       const double lift = rng.uniform(c.step_lift_m.lo, c.step_lift_m.hi);
@@ -258,6 +296,18 @@ Pose RandomMotion::pose(double t) const {
     }
   crouch(p, std::max(0.0, eval(crouch_knee_, t)));
   tilt_pelvis(p, eval(pelvis_pitch_, t));
+  for (int side = 0; side < 2; ++side) {
+    // The raised foot is kept near level as far as the ankle goes: the angle that levels
+    // it, saturated smoothly (tanh, C1) at dorsiflexion 20° and plantar flexion 45°, so its
+    // toes stay above the standing foot's.
+    const int hip = side ? r_hip : l_hip, knee = side ? r_knee : l_knee, ankle = side ? r_ankle : l_ankle;
+    const double hip_flex = eval(raise_[side * 3 + 0], t), knee_flex = eval(raise_[side * 3 + 1], t);
+    p.a[hip].flex += hip_flex;
+    p.a[knee].flex += knee_flex;
+    const double level = knee_flex - hip_flex, limit = level > 0 ? 20.0 : 45.0;
+    p.a[ankle].flex += limit * std::tanh(level / limit);
+    p.a[hip].abd += eval(raise_[side * 3 + 2], t);
+  }
   for (const Step& s : steps_) {
     if (t <= s.start || t >= s.end) continue;
     const double lift = std::pow(std::sin(kPi * (t - s.start) / (s.end - s.start)), 2);  // C1: zero slope at the ends

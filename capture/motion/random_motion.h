@@ -22,8 +22,12 @@
 // Legs: a crouch bends hips, knees and ankles together and lowers the pelvis by exactly
 // what the bent legs lose in height (humanoid::crouch), so the feet stay flat on the floor;
 // stepping lifts one foot at a time (sin² profiles, C1) with the knee and ankle keeping it
-// level, optionally swung out sideways, while the other stays down. Turning pivots on the
-// feet (no foot placement), as the `turn` segment does; the pelvis does not translate.
+// level, optionally swung out sideways, while the other stays down. A raised leg (off by
+// default) lifts one foot and holds it over key intervals: hip flexion (or extension),
+// knee flexion and abduction drawn in their ranges, as in stepping onto a box, kicking or
+// a high knee; the other leg stands, a leg goes up only while the other is down, and
+// neither a crouch nor a step overlaps a raise. Turning pivots on the feet (no foot
+// placement), as the `turn` segment does; the pelvis does not translate.
 //
 // Deterministic: one seed gives the same motion on every platform (PortableRandom; every
 // key draws the same number of values whatever the probabilities).
@@ -68,6 +72,14 @@ struct RandomMotionConfig {
   // Crouching: per key, with this probability, a pelvis drop drawn in depth (m).
   double crouch_probability = 0.3;
   AngleRange crouch_depth_m{0.05, 0.35};
+  // A raised leg: per key, with this probability (0: off, the motion of the seed before
+  // the raise existed; its draws come from a stream of their own), one leg, drawn, lifted
+  // to the drawn hip flexion (+ forward, − back), knee flexion and hip abduction (degrees,
+  // anatomical: hip flexion 120°, extension 20–30°, abduction 45°, knee 135–140°, AAOS).
+  double raise_probability = 0;
+  AngleRange raise_hip_flex_deg{-15, 100};
+  AngleRange raise_knee_deg{0, 120};
+  AngleRange raise_abduction_deg{0, 30};
   // Pelvis tilt (degrees, + forward) with the legs kept in place (humanoid::tilt_pelvis):
   // bending at the hips. Drawn with the torso (same hold), from a stream of its own, so a
   // zero range gives the motion the seed gave before the tilt existed.
@@ -107,6 +119,7 @@ class RandomMotion {
   // flex, abd, twist.
   std::vector<Curve> angles_;  // index: (joint × 2 + side) × 3 + axis
   Curve heading_, crouch_knee_, pelvis_pitch_;
+  std::vector<Curve> raise_;  // index: side × 3 + (hip flexion, knee flexion, hip abduction)
   struct Step {
     double start, end;  // s
     int side;           // 0 left, 1 right

@@ -150,6 +150,43 @@ TEST(RandomMotion, FeetStayOnTheFloor) {
   EXPECT_LT(highest_stance, 0.01);   // one foot always on it
 }
 
+// A raised leg lifts one foot high (a box step, a high knee) while the other stands on the
+// floor, moves as smoothly as the rest, and off (probability 0) leaves the seed's motion
+// exactly as it was.
+TEST(RandomMotion, ARaisedLegLiftsOneFootWhileTheOtherStands) {
+  auto spec = [](const std::string& raise) {
+    return parse_motion_spec("segments:\n  - {type: random, duration: 60, seed: 3" + raise + "}\n", "r.yaml");
+  };
+  const BvhMotion raised = generate_motion(spec(", raise: {probability: 0.5}"));
+  EXPECT_EQ(generate_motion(spec(", raise: {probability: 0, knee: [0, 30]}")).frames, generate_motion(spec("")).frames);
+  const int lt = raised.joint_index("left_toe"), rt = raised.joint_index("right_toe");
+  const int la = raised.joint_index("left_ankle"), ra = raised.joint_index("right_ankle");
+  double lowest = 1e9, highest_stance = -1e9, highest_ankle_gap = 0;
+  int left_up = 0, right_up = 0;
+  for (int f = 0; f < raised.num_frames(); ++f) {
+    const BvhTransforms G = bvh_global_transforms(raised, f);
+    const double l = G[lt].translation().y(), r = G[rt].translation().y();
+    lowest = std::min({lowest, l, r});
+    highest_stance = std::max(highest_stance, std::min(l, r));
+    const double gap = G[la].translation().y() - G[ra].translation().y();
+    highest_ankle_gap = std::max(highest_ankle_gap, std::abs(gap));
+    left_up += gap > 0.2, right_up += gap < -0.2;
+  }
+  EXPECT_GT(lowest, -0.01);         // no toe through the floor
+  EXPECT_LT(highest_stance, 0.01);  // one foot always on it
+  EXPECT_GT(highest_ankle_gap, 0.4) << "m: a knee raised high";
+  EXPECT_GT(left_up, 30) << "frames with the left ankle 20 cm above the right";
+  EXPECT_GT(right_up, 30) << "frames with the right ankle 20 cm above the left";
+  // At 30 fps: per-frame change below 15° and second differences below 6°/frame², as for
+  // the default ranges (SmoothAndBoundedAcceleration).
+  const int n = raised.num_frames();
+  const Eigen::MatrixXd& m = raised.frames;
+  const Eigen::MatrixXd d2 = (m.bottomRows(n - 2) - 2 * m.middleRows(1, n - 2) + m.topRows(n - 2)).cwiseAbs();
+  const Eigen::MatrixXd d1 = (m.bottomRows(n - 1) - m.topRows(n - 1)).cwiseAbs();
+  EXPECT_LT(d2.rightCols(raised.num_channels() - 3).maxCoeff(), 6.0);
+  EXPECT_LT(d1.rightCols(raised.num_channels() - 3).maxCoeff(), 15.0);
+}
+
 // The pelvis tilts within its range (a bow at the hips) and the legs stay exactly where the
 // same seed without a tilt puts them; the head goes forward and down.
 TEST(RandomMotion, ThePelvisTiltsWithTheLegsInPlace) {
@@ -207,6 +244,10 @@ TEST(RandomMotion, StrictYaml) {
                {"r.yaml:4:", "segments[0].crouch.depth", "min > max"});
   expect_error([] { parse_motion_spec("segments:\n  - type: random\n    duration: 5\n    step: {probability: 1.5}\n", "r.yaml"); },
                {"r.yaml:4:", "segments[0].step.probability"});
+  expect_error([] { parse_motion_spec("segments:\n  - type: random\n    duration: 5\n    raise: {knee: [90, 10]}\n", "r.yaml"); },
+               {"r.yaml:4:", "segments[0].raise.knee", "min > max"});
+  expect_error([] { parse_motion_spec("segments:\n  - type: random\n    duration: 5\n    raise: {height: 0.3}\n", "r.yaml"); },
+               {"r.yaml:4:", "segments[0].raise.height", "unknown key"});
   // Exactly one error, of weft's type.
   EXPECT_THROW(parse_motion_spec("segments:\n  - {type: random, duration: 5, key_interval: [1.2, 0.6]}\n", "r.yaml"),
                weft::Error);
