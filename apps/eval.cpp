@@ -74,7 +74,8 @@ void add_eval_command(CLI::App& app) {
       "ground truth (a `weft synth` dataset) by the paper's metrics: out-of-balance force of the\n"
       "predicted cloth, penetration of cloth into the body, silhouette IoU over all views / the\n"
       "other views / the input view (AMVIoU, RVIoU, SVIoU), cloth and body vertex error and MPJPE.\n"
-      "Writes metrics.json, report.html (viewable offline) and overlays of the worst\n"
+      "Writes metrics.json, report.html (viewable offline), joints.csv (predicted and true\n"
+      "BODY_25 keypoints per frame) and overlays of the worst\n"
       "and median frames into --out. Definitions and units: docs/EVALUATION.md.");
   cmd->add_option("--prediction", o->prediction,
                   "Capture folder written by `weft infer` (capture.json, meshes/, pose.motion)")
@@ -83,7 +84,7 @@ void add_eval_command(CLI::App& app) {
                   "Dataset with ground truth (a `weft synth` folder holding dataset.yaml, gt/, masks/, cameras.yaml); "
                   "capture.json's frame ids are its frames")
       ->required();
-  cmd->add_option("--out", *out, "Report folder (created if missing): metrics.json, report.html, overlay_*.png")
+  cmd->add_option("--out", *out, "Report folder (created if missing): metrics.json, report.html, joints.csv, overlay_*.png")
       ->required();
   cmd->add_option("--view", o->view,
                   "The input view (one of the dataset's views, e.g. cam03): SVIoU is measured in it, RVIoU in the "

@@ -258,6 +258,7 @@ Kept measure_frame(const EvaluationInputs& in, const EvaluationOptions& o, int k
   truth.root_rotation = gt_pose.joints[in.param.pivot_joint].linear();
   const Camera& input_camera = in.camera_of(f, e.view);
   truth.view_rotation = input_camera.R;
+  fe.predicted_body25 = predicted.body25, fe.true_body25 = truth.body25;
   FrameMeasures& fm = fe.measures;
   measure_geometry(ch, predicted, truth, !std::binary_search(in.failed.begin(), in.failed.end(), f), fm);
   for (auto [means, errors] : {std::pair{&pool.joint_root_relative, &fm.joint_errors_root_relative_mm},

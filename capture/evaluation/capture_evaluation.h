@@ -55,6 +55,9 @@ struct FrameEvaluation {
   FrameMeasures measures;      // the prediction against the ground truth (pivot error: before the shift)
   FrameMeasures ground_truth;  // the ground truth's own penetration and out-of-balance force
   std::vector<double> iou;     // IoU per dataset view (empty: not an IoU frame)
+  // The BODY_25 keypoints measured (world, character units; NaN rows unmapped): the
+  // prediction's as measured (after the shift) and the ground truth's. joints.csv.
+  Vertices predicted_body25, true_body25;
 };
 
 // A side-by-side image: the input view with the prediction drawn on it (left) and the

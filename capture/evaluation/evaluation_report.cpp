@@ -200,6 +200,25 @@ std::string CaptureEvaluation::to_json() const {
   return j.dump(1) + "\n";
 }
 
+namespace {
+
+// joints.csv: per frame and mapped BODY_25 keypoint, the prediction's position as measured
+// and the ground truth's, world metres: what any further joint measure needs.
+std::string joints_csv(const CaptureEvaluation& e) {
+  std::string out = "frame,keypoint,predicted_x_m,predicted_y_m,predicted_z_m,true_x_m,true_y_m,true_z_m\n";
+  for (const FrameEvaluation& f : e.frames)
+    for (int k = 0; k < int(f.true_body25.rows()) && k < int(f.predicted_body25.rows()); ++k) {
+      if (!f.true_body25.row(k).allFinite() || !f.predicted_body25.row(k).allFinite()) continue;
+      const Eigen::RowVector3d p = f.predicted_body25.row(k) * e.metres_per_unit,
+                               t = f.true_body25.row(k) * e.metres_per_unit;
+      out += fmt::format("{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}\n", f.id, kBody25Names[k], p.x(), p.y(), p.z(),
+                         t.x(), t.y(), t.z());
+    }
+  return out;
+}
+
+}  // namespace
+
 std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, const std::string& dir) {
   fs::create_directories(dir);
   // Overlays of an earlier report in this folder would be left beside this one's.
@@ -221,6 +240,7 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
     written.push_back(path);
   }
   write_text("metrics.json", e.to_json());
+  write_text("joints.csv", joints_csv(e));
 
   std::vector<int> ids;
   for (const FrameEvaluation& f : e.frames) ids.push_back(f.id);
@@ -406,7 +426,7 @@ std::vector<std::string> write_evaluation_report(const CaptureEvaluation& e, con
         f.id, num(f.measures.cloth_error_mean_mm, 2), num(f.measures.body_error_mean_mm, 2), num(f.measures.mpjpe_mm, 2), num(f.measures.pivot_error_mm, 2),
         num(f.measures.penetration_mean_mm, 3), num(f.measures.penetration_max_mm, 3), sci(f.measures.oob_force_mean_n), sci(f.measures.oob_force_max_n),
         num(f.measures.amv_iou, 4), num(f.measures.rv_iou, 4), num(f.measures.sv_iou, 4));
-  h += "</table>\n<p>All numbers: <a href=\"metrics.json\">metrics.json</a>.</p>\n</body></html>\n";
+  h += "</table>\n<p>All numbers: <a href=\"metrics.json\">metrics.json</a>; the keypoints per frame, predicted and true: <a href=\"joints.csv\">joints.csv</a>.</p>\n</body></html>\n";
   write_text("report.html", h);
   return written;
 }

@@ -5,6 +5,8 @@
 // the report holds every metric; bad capture folders are errors naming the file.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include <numbers>
 #include <fmt/format.h>
 #include <sys/wait.h>
@@ -188,7 +190,7 @@ TEST(CaptureEvaluationIntegration, PerfectPredictionHasNoErrorAndTheGroundTruths
   std::ofstream(report / "overlay_worst_0099.png") << "an earlier report's";
   const std::vector<std::string> written = write_evaluation_report(e, report.string());
   EXPECT_FALSE(fs::exists(report / "overlay_worst_0099.png"));
-  EXPECT_EQ(written.size(), 4u);  // two overlays, metrics.json, report.html
+  EXPECT_EQ(written.size(), 5u);  // two overlays, metrics.json, joints.csv, report.html
   const nlohmann::json j = nlohmann::json::parse(slurp(report / "metrics.json"));
   const nlohmann::json& s = j["summary"];
   for (const char* key : {"mean_n", "max_n", "mean_rel", "max_rel"}) {
@@ -233,6 +235,27 @@ TEST(CaptureEvaluationIntegration, GroundTruthTranslationTakesBackAGlobalShift) 
   EXPECT_LT(moved.amv_iou, 0.9);
   EXPECT_EQ(moved.iou_frames, 2);  // frames 1 and 3
   EXPECT_EQ(moved.oob_frames, 1);  // frame 3
+  // joints.csv holds the keypoints as measured: their distances average to the MPJPE.
+  const fs::path report = eval_scratch_root() / "report_shifted";
+  write_evaluation_report(moved, report.string());
+  std::istringstream csv(slurp(report / "joints.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "frame,keypoint,predicted_x_m,predicted_y_m,predicted_z_m,true_x_m,true_y_m,true_z_m");
+  double sum_mm = 0;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream cells(line);
+    for (std::string c; std::getline(cells, c, ',');) f.push_back(c);
+    ASSERT_EQ(f.size(), 8u) << line;
+    const Eigen::Vector3d p(std::stod(f[2]), std::stod(f[3]), std::stod(f[4])), t(std::stod(f[5]), std::stod(f[6]), std::stod(f[7]));
+    sum_mm += (p - t).norm() * 1e3;
+    ++rows;
+  }
+  EXPECT_EQ(rows % int(moved.frames.size()), 0);
+  EXPECT_GT(rows, 0);
+  EXPECT_NEAR(sum_mm / rows, moved.mpjpe_mm, 1e-2);
   o.gt_translation = true;
   const CaptureEvaluation back = evaluate_capture(o);
   EXPECT_NEAR(back.cloth_error_mean_mm, 0.0, 1e-6);
