@@ -17,7 +17,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -27,17 +26,14 @@
 #include "capture/model/capture_networks.h"
 #include "capture/motion/bvh.h"
 #include "capture/motion/motion_retarget.h"
+#include "bench/bench_tool.h"
 #include "graph/error.h"
 
 using namespace weft;
 using namespace weft::capture;
+using weft::bench::angle_from_vertical_deg;
 
 namespace {
-
-double deg(double rad) { return rad * 180 / std::numbers::pi; }
-double angle_from_vertical_deg(const Eigen::Vector3d& v) {
-  return deg(std::atan2(Eigen::Vector2d(v.x(), v.z()).norm(), v.y()));
-}
 
 void summary(const char* what, const std::vector<double>& v) {
   std::printf("%-44s median %6.1f   p5 %6.1f   p95 %6.1f   (%zu frames)\n", what, quantile(v, 0.5), quantile(v, 0.05),
@@ -97,11 +93,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_pelvis_tilt: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return weft::bench::run_tool("bench_pelvis_tilt", run, argc, argv); }

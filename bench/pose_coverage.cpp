@@ -15,7 +15,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -24,16 +23,14 @@
 #include "capture/evaluation/frame_measures.h"
 #include "capture/motion/motion_retarget.h"
 #include "capture/motion/procedural_motion.h"
+#include "bench/bench_tool.h"
 #include "graph/error.h"
 
 using namespace weft;
 using namespace weft::capture;
+using weft::bench::angle_from_vertical_deg;
 
 namespace {
-
-double angle_from_vertical_deg(const Eigen::Vector3d& v) {
-  return std::atan2(Eigen::Vector2d(v.x(), v.z()).norm(), v.y()) * 180 / std::numbers::pi;
-}
 
 struct PoseSet {
   std::vector<Vertices> body25;  // per pose, MidHip at the origin
@@ -97,10 +94,9 @@ int run(int argc, char** argv) {
   print_distribution("ankle gap (mm), the pose set", set.ankle_gap_mm);
   print_distribution("ankle gap (mm), the test clip", test.ankle_gap_mm);
 
-  std::vector<int> all, upper = {0, 1, 2, 3, 4, 5, 6, 7, 15, 16, 17, 18};
+  std::vector<int> all, upper = {0, 1, 2, 3, 4, 5, 6, 7, 8, 15, 16, 17, 18};  // head, arms, trunk
   for (int j = 0; j < 25; ++j)
     if (test.body25[0].row(j).allFinite()) all.push_back(j);
-  upper.push_back(8);
   const std::vector<double> a = nearest_pa_mm(test, set, all, ch.metres_per_unit);
   const std::vector<double> u = nearest_pa_mm(test, set, upper, ch.metres_per_unit);
   double sum_a = 0, sum_u = 0;
@@ -113,11 +109,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_pose_coverage: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return weft::bench::run_tool("bench_pose_coverage", run, argc, argv); }
