@@ -229,7 +229,7 @@ BodyMesh::FaceNear BodyMesh::near_face(const Eigen::Vector3d& x, int f) const {
   return near;
 }
 
-ClosestPoint BodyMesh::signed_closest_point(const Eigen::Vector3d& x, const FaceNear& near) const {
+ClosestPoint BodyMesh::signed_closest_point(const Eigen::Vector3d& x, const FaceNear& near, Side known) const {
   ClosestPoint best;
   if (near.face < 0) return best;
   best.point = near.point;
@@ -256,7 +256,8 @@ ClosestPoint BodyMesh::signed_closest_point(const Eigen::Vector3d& x, const Face
   const double unsigned_distance = std::sqrt(near.distance2);
   best.distance = (x - best.point).dot(best.normal) < 0 ? -unsigned_distance : unsigned_distance;
   // On a folded surface the pseudo-normal's sign is not to be trusted (see the header).
-  if (best.distance < 0 && (folded_[t[0]] || folded_[t[1]] || folded_[t[2]]) && winding_number(x) < 0.5) {
+  if (best.distance < 0 && (folded_[t[0]] || folded_[t[1]] || folded_[t[2]]) &&
+      (known == Side::unknown ? winding_number(x) < 0.5 : known == Side::outside)) {
     best.distance = unsigned_distance;
     best.normal = -best.normal;  // d = n·(x − p) inside a face, with d now > 0
   }
@@ -279,7 +280,8 @@ double BodyMesh::winding_number(const Eigen::Vector3d& x) const {
 }
 
 template <class Accept>
-ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const {
+ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept,
+                                           Side known) const {
   FaceNear best;
   best.distance2 = std::isfinite(max_distance) ? max_distance * max_distance : std::numeric_limits<double>::infinity();
   traverse(x, [&] { return best.distance2; }, [&](int f) {
@@ -287,15 +289,15 @@ ClosestPoint BodyMesh::closest_point_where(const Eigen::Vector3d& x, double max_
     const FaceNear near = near_face(x, f);
     if (near.distance2 < best.distance2) best = near;
   });
-  return signed_closest_point(x, best);
+  return signed_closest_point(x, best, known);
 }
 
-ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance) const {
-  return closest_point_where(x, max_distance, [](int) { return true; });
+ClosestPoint BodyMesh::closest_point(const Eigen::Vector3d& x, double max_distance, Side known) const {
+  return closest_point_where(x, max_distance, [](int) { return true; }, known);
 }
 
 ClosestPoint BodyMesh::closest_point_and_faces_within(const Eigen::Vector3d& x, double band,
-                                                      std::vector<FaceNear>& faces) const {
+                                                      std::vector<FaceNear>& faces, Side known) const {
   faces.clear();
   const double band2 = band * band;
   FaceNear best;
@@ -305,12 +307,13 @@ ClosestPoint BodyMesh::closest_point_and_faces_within(const Eigen::Vector3d& x, 
     if (near.distance2 < band2) faces.push_back(near);
     if (near.distance2 < best.distance2) best = near;
   });
-  return signed_closest_point(x, best);
+  return signed_closest_point(x, best, known);
 }
 
 ClosestPoint BodyMesh::closest_point_facing_away(const Eigen::Vector3d& x, double max_distance,
                                                  const Eigen::Vector3d& facing, double max_cos) const {
-  return closest_point_where(x, max_distance, [&](int f) { return face_normals_[f].dot(facing) < max_cos; });
+  return closest_point_where(
+      x, max_distance, [&](int f) { return face_normals_[f].dot(facing) < max_cos; }, Side::unknown);
 }
 
 }  // namespace weft::physics

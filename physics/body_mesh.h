@@ -43,10 +43,17 @@ class BodyMesh {
   const std::vector<std::array<int, 3>>& faces() const { return faces_; }
   int num_active_faces() const { return static_cast<int>(active_.size()); }
 
+  // Which side of the surface a query point is known to lie on, when the caller knows it
+  // without asking: a point that moved less than |d| from where the signed distance was d
+  // has not crossed the surface (distance is 1-Lipschitz), so it is on the same side.
+  // Where the pseudo-normal's sign is doubted (a folded vertex) a known side replaces the
+  // O(faces) winding number.
+  enum class Side { unknown, outside, inside };
   // Closest point on the active surface; nodes farther than `max_distance` are pruned (the
   // result then has face = -1 if nothing is that close).
   ClosestPoint closest_point(const Eigen::Vector3d& x,
-                             double max_distance = std::numeric_limits<double>::infinity()) const;
+                             double max_distance = std::numeric_limits<double>::infinity(),
+                             Side known = Side::unknown) const;
   // The same over the active faces whose unit normal n has n·facing < max_cos only: the
   // closest point on another sheet of the surface than the one `facing` belongs to (the
   // other side of a crease or of a gap between two limbs).
@@ -73,7 +80,7 @@ class BodyMesh {
   // closest_point(x) and, in `faces` (cleared first, in no order), every active face closer
   // to x than `band` (m) with its own closest point: one traversal of the tree.
   ClosestPoint closest_point_and_faces_within(const Eigen::Vector3d& x, double band,
-                                              std::vector<FaceNear>& faces) const;
+                                              std::vector<FaceNear>& faces, Side known = Side::unknown) const;
   // The mesh as a cell complex of its active faces, for sums over its features:
   // the ids of face f's edges (k, k+1), an edge's two vertices, and the inclusion–exclusion
   // weights that make Σ_faces − … count each feature's neighbourhood once: an edge shared
@@ -95,7 +102,8 @@ class BodyMesh {
   int build(int begin, int end);
   // The closest point over the active faces `accept(face)` admits.
   template <class Accept>
-  ClosestPoint closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept) const;
+  ClosestPoint closest_point_where(const Eigen::Vector3d& x, double max_distance, const Accept& accept,
+                                   Side known) const;
   // The one tree walk of every query: visit(face) for each active face in a leaf whose box
   // is closer to x than √bound2(), nearer children first; bound2() may shrink as faces are
   // visited (a closest-point search) or stay fixed (all faces within a band).
@@ -103,7 +111,7 @@ class BodyMesh {
   void traverse(const Eigen::Vector3d& x, const Bound& bound2, const Visit& visit) const;
   FaceNear near_face(const Eigen::Vector3d& x, int face) const;
   // The signed closest point of the nearest face found (face −1: none).
-  ClosestPoint signed_closest_point(const Eigen::Vector3d& x, const FaceNear& nearest) const;
+  ClosestPoint signed_closest_point(const Eigen::Vector3d& x, const FaceNear& nearest, Side known) const;
   void refit(int node);
   void compute_normals();
 

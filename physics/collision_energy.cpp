@@ -24,8 +24,8 @@ DistanceSample signed_distance(const SphereObstacle& sphere, const Eigen::Vector
   return s;
 }
 
-DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x) {
-  return signed_distance(body.closest_point(x), x);
+DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x, BodyMesh::Side known) {
+  return signed_distance(body.closest_point(x, std::numeric_limits<double>::infinity(), known), x);
 }
 
 DistanceSample signed_distance(const ClosestPoint& c, const Eigen::Vector3d& x) {
@@ -209,8 +209,10 @@ double CollisionEnergy::evaluate_terms(const Eigen::VectorXd& x, Eigen::VectorXd
       if (c.d_ref > thickness_ && (xi - c.x_ref).norm() < c.d_ref - thickness_) continue;
       // With smooth creases one walk of the tree also gathers the faces within the band.
       thread_local std::vector<BodyMesh::FaceNear> near;
-      const ClosestPoint cp = smooth_creases_ ? bodies_[b]->closest_point_and_faces_within(xi, thickness_, near)
-                                              : bodies_[b]->closest_point(xi);
+      const BodyMesh::Side known = c.side(xi);
+      const ClosestPoint cp = smooth_creases_
+                                  ? bodies_[b]->closest_point_and_faces_within(xi, thickness_, near, known)
+                                  : bodies_[b]->closest_point(xi, std::numeric_limits<double>::infinity(), known);
       const DistanceSample s = signed_distance(cp, xi);
       c.x_ref = xi;
       c.d_ref = s.distance;
@@ -260,7 +262,7 @@ void CollisionEnergy::step_bound_samples(int i, const Eigen::Vector3d& xi, doubl
     CacheEntry& c = cache_[b][i];
     // 1-Lipschitz: a vertex that cannot get within ½δ of the body needs no query.
     if (c.d_ref - (xi - c.x_ref).norm() - reach >= 0.5 * thickness_) continue;
-    const DistanceSample s = signed_distance(*bodies_[b], xi);
+    const DistanceSample s = signed_distance(*bodies_[b], xi, c.side(xi));
     c.x_ref = xi;
     c.d_ref = s.distance;
     out.push_back(s);

@@ -9,6 +9,7 @@
 // m·g/k ≈ 1e-7 m inside the band, Newton kept switching vertices in and out of the
 // active set and stalled on draping cloth.
 // The per-vertex 3×3 Hessian E''∇d∇dᵀ + E'∇²d is projected to PSD.
+#include <cmath>
 #include <vector>
 
 #include "physics/body_mesh.h"
@@ -29,7 +30,8 @@ struct DistanceSample {
   Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
 };
 DistanceSample signed_distance(const SphereObstacle& sphere, const Eigen::Vector3d& x);
-DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x);
+DistanceSample signed_distance(const BodyMesh& body, const Eigen::Vector3d& x,
+                               BodyMesh::Side known = BodyMesh::Side::unknown);
 // The same from a closest point `c` of x already found on the body.
 DistanceSample signed_distance(const ClosestPoint& c, const Eigen::Vector3d& x);
 
@@ -162,6 +164,12 @@ class CollisionEnergy : public Energy {
   struct CacheEntry {
     Eigen::Vector3d x_ref;
     double d_ref = -std::numeric_limits<double>::infinity();
+    // The side of the body x is on, known from the last query without a winding number
+    // when x is within |d_ref| of x_ref (see BodyMesh::Side).
+    BodyMesh::Side side(const Eigen::Vector3d& x) const {
+      if (!std::isfinite(d_ref) || !((x - x_ref).norm() < std::abs(d_ref))) return BodyMesh::Side::unknown;
+      return d_ref > 0 ? BodyMesh::Side::outside : BodyMesh::Side::inside;
+    }
   };
   mutable std::vector<std::vector<CacheEntry>> cache_;
   // The x of the last Hessian evaluation and this energy's own gradient there (for

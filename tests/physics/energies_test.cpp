@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <functional>
+#include <limits>
 #include <random>
 #include <set>
 #include <string>
@@ -462,6 +463,59 @@ TEST(Energies, BodyMeshSignAgreesWithTheWindingNumberWhereTheSurfaceFolds) {
     }
   EXPECT_GT(outside_but_pseudo_inside, 0) << "the case the winding number decides: outside, behind the tip's pseudo-normal";
   EXPECT_EQ(checked, 288);
+}
+
+// A side of the body known from an earlier query (a point that moved less than its distance
+// has not crossed the surface) replaces the winding number where the surface folds, and the
+// collision energy that uses it, asked again and again as its vertices move, gives exactly
+// what a fresh energy gives at each position: the shortcut changes time, not results.
+TEST(Energies, BodyMeshKnownSideReplacesTheWindingNumberAndChangesNoResult) {
+  const BodyMesh sphere = testing::uv_sphere(Vec3(0, 1, 0), 0.3);
+  Eigen::MatrixX3d v = sphere.vertices();
+  const Vec3 tip(0.02, 0.55, 0.01);
+  v.row(1) = tip.transpose();  // the spike of the test above
+  const BodyMesh folded(v, sphere.faces());
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Vec3> points;
+  int decided_by_side = 0;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 24; ++j) {
+      const double th = M_PI * (i + 0.5) / 12, ph = 2 * M_PI * j / 24;
+      const Vec3 x = tip + 0.02 * Vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+      points.push_back(x);
+      const ClosestPoint unknown = folded.closest_point(x);
+      const ClosestPoint out = folded.closest_point(x, inf, BodyMesh::Side::outside);
+      const ClosestPoint in = folded.closest_point(x, inf, BodyMesh::Side::inside);
+      const bool inside = folded.winding_number(x) >= 0.5;
+      EXPECT_EQ((inside ? in : out).distance, unknown.distance) << "the true side gives the winding number's answer";
+      EXPECT_EQ(std::abs(out.distance), std::abs(unknown.distance));
+      if (out.distance > 0 && in.distance < 0) ++decided_by_side;
+    }
+  EXPECT_GT(decided_by_side, 0) << "points where the pseudo-normal is doubted and the side decides";
+
+  const int n = static_cast<int>(points.size());
+  Eigen::VectorXd x(3 * n);
+  for (int i = 0; i < n; ++i) x.segment<3>(3 * i) = points[i];
+  for (const bool smooth : {false, true}) {
+    CollisionEnergy reused(n, 0.03, 1e4);  // a band wide enough to hold every point
+    reused.set_smooth_creases(smooth);
+    reused.set_bodies({&folded});
+    std::mt19937 rng(7);
+    std::normal_distribution<double> step(0.0, 1e-3);  // m
+    Eigen::VectorXd y = x;
+    for (int round = 0; round < 6; ++round) {
+      CollisionEnergy fresh(n, 0.03, 1e4);
+      fresh.set_smooth_creases(smooth);
+      fresh.set_bodies({&folded});
+      Eigen::VectorXd g_reused = Eigen::VectorXd::Zero(3 * n), g_fresh = Eigen::VectorXd::Zero(3 * n);
+      const double e_reused = reused.evaluate(y, &g_reused, nullptr);
+      const double e_fresh = fresh.evaluate(y, &g_fresh, nullptr);
+      EXPECT_GT(e_fresh, 0);
+      EXPECT_EQ(e_reused, e_fresh) << "smooth creases " << smooth << ", round " << round;
+      EXPECT_EQ((g_reused - g_fresh).cwiseAbs().maxCoeff(), 0.0);
+      for (int k = 0; k < y.size(); ++k) y[k] += step(rng);
+    }
+  }
 }
 
 // The smooth creases' query (one walk of the tree) gives closest_point's answer and exactly
