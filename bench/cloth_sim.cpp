@@ -11,7 +11,7 @@
 // start_following_body (0/1), secant_stiffness (0/1: the collision's secant stiffness along the
 // contact normal, off by default),
 // precondition_exact_hessian (0/1), negative_curvature_search (0/1), per_vertex_step_limits
-// (0/1), planar_step_bounds (0/1: the per-vertex collision bound along the normal only, or
+// (0/1), refine_limited_steps (0/1), planar_step_bounds (0/1: the per-vertex collision bound along the normal only, or
 // scaling the whole move), smooth_creases (0/1: the body's concave creases, as weft synth's default),
 // factor_without_weak_pairs (0/1), CHOLMOD's supernode
 // amalgamation nrelax=A,B,C and zrelax=A,B,C, max_iterations (per
@@ -143,6 +143,7 @@ int main(int argc_all, char** argv_all) {
       s.newton.negative_curvature_search = value != "0";
     else if (key == "max_iterations") s.newton.max_iterations = std::atoi(value.c_str());
     else if (key == "per_vertex_step_limits") s.newton.per_vertex_step_limits = value != "0";
+    else if (key == "refine_limited_steps") s.newton.refine_limited_steps = value != "0";
     else if (key == "smooth_creases") s.collision_smooth_creases = value != "0";
     else if (key == "planar_step_bounds") s.collision_planar_step_bounds = value != "0";
     else if (key == "secant_stiffness") s.collision_secant_stiffness = value != "0";

@@ -134,6 +134,51 @@ void NewtonSolver::exact_direction(const SparseHessian& H, const Eigen::VectorXd
   if (report.cg_iterations == before) d = cholmod_->solve(-g);
 }
 
+void NewtonSolver::refine_limited_direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
+                                            const Eigen::VectorXd& d, Eigen::VectorXd& limited, NewtonReport& report) {
+  // The constraints: vertex i's move along u_i (the unit direction of what the filter took
+  // from it) stays what the filter left.
+  std::vector<std::pair<int, Eigen::Vector3d>> held;
+  for (int i = 0; i < n_; ++i) {
+    const Eigen::Vector3d cut = limited.segment<3>(3 * i) - d.segment<3>(3 * i);
+    const double length = cut.norm();
+    if (length > 0) held.push_back({i, cut / length});
+  }
+  if (held.empty() || !cholmod_->has_factor()) return;
+  auto project = [&](Eigen::VectorXd& v) {  // onto the moves that keep the held components
+    for (const auto& [i, u] : held) v.segment<3>(3 * i) -= u * u.dot(v.segment<3>(3 * i));
+  };
+  // Projected PCG on the model gᵀy + ½yᵀ(H + δI)y from y = limited (H the factorised,
+  // corrected Hessian: positive semi-definite).
+  Eigen::VectorXd y = limited;
+  Eigen::VectorXd r = -g - hessian_.multiply(y) - delta_ * y;
+  project(r);
+  const double target = 1e-2 * r.norm();
+  Eigen::VectorXd z = cholmod_->solve(r);
+  project(z);
+  Eigen::VectorXd p = z;
+  double rz = r.dot(z);
+  for (int k = 0; k < options_.cg_max_iterations && r.norm() > target; ++k) {
+    Eigen::VectorXd hp = hessian_.multiply(p);
+    hp += delta_ * p;
+    project(hp);
+    const double php = p.dot(hp);
+    if (!(php > 0)) break;
+    const double step = rz / php;
+    y += step * p;
+    r -= step * hp;
+    ++report.cg_iterations;
+    z = cholmod_->solve(r);
+    project(z);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  // The other vertices' new moves meet the filter too.
+  clip_vertex_steps(x, y);
+  if (y.allFinite() && g.dot(y) < 0) limited.swap(y);
+}
+
 bool NewtonSolver::correct_hessian(const Eigen::VectorXd& x, NewtonReport& report) {
   if (hessian_corrected_) return false;
   hessian_corrected_ = true;
@@ -376,6 +421,8 @@ NewtonReport NewtonSolver::minimize(Eigen::VectorXd& x) {
         clip_vertex_steps(x, limited);
         for (int i = 0; i < n_; ++i)
           if (limited.segment<3>(3 * i) != d.segment<3>(3 * i)) ++trace.limited_vertices;
+        if (trace.limited_vertices > 0 && options_.refine_limited_steps && g.dot(limited) < 0)
+          refine_limited_direction(x, g, d, limited, report);
         if (trace.limited_vertices > 0) {
           if (g.dot(limited) < 0)
             d.swap(limited);

@@ -88,6 +88,18 @@ struct NewtonOptions {
   // scaled, on the 4k drape 77 → 47 Newton iterations in the worst frame, on the 1k skirt
   // 95 → 73 per frame (docs/notes/2026-12-06-contact-crawl-levers.md).
   bool per_vertex_step_limits = true;
+  // With per_vertex_step_limits: when the filter cut some vertices' moves, the rest of the
+  // direction is solved again with those cuts held, instead of being left as if the cut
+  // vertices had moved in full. The part the filter removed from each cut vertex's move
+  // fixes that vertex's move along it; the other components minimise Newton's quadratic
+  // model by projected CG (preconditioned with this iteration's factor, at most
+  // cg_max_iterations, to 1e-2 of the projected residual), from the cut direction, so the
+  // model falls at least as far as with the cut direction alone. Without it a vertex
+  // stopped at an obstacle stretched the cloth toward its freely moving neighbours, and
+  // the next iterations spent themselves undoing that (issue 41: Newton iterations per
+  // frame, 4k drape 23.2 → 21.3, 1k skirt 38.5 → 29.2, 3k skirt 51.0 → 39.8; 40 perturbed
+  // 448-vertex windows 92 → 78 per window, docs/notes/2026-12-07-contact-starts-and-known-side.md).
+  bool refine_limited_steps = true;
 };
 
 struct NewtonReport {
@@ -148,6 +160,11 @@ class NewtonSolver {
   enum class CgOutcome { converged, negative_curvature, too_slow };
   CgOutcome preconditioned_cg(const SparseHessian& H, const Eigen::VectorXd& g, Eigen::VectorXd& d,
                               NewtonReport& report);
+  // refine_limited_steps: `limited` (the filter's cut of d) replaced by the minimiser of
+  // Newton's model with each cut vertex's move along its cut held; kept as it is when the
+  // result is not a descent direction.
+  void refine_limited_direction(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Eigen::VectorXd& d,
+                                Eigen::VectorXd& limited, NewtonReport& report);
   // Truncated PCG on the exact Hessian with the corrected Hessian's factor (see direct).
   void exact_direction(const SparseHessian& H, const Eigen::VectorXd& g, Eigen::VectorXd& d,
                        NewtonReport& report);
