@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job: the whole method end to end on a small studio, in about 23 minutes on two
+# The main job: the whole method end to end on a small studio, in about 15 minutes on two
 # cores after the build.
 #  1. weft synth writes a multi-view studio dataset with ground-truth body and cloth: 3 s of
 #     a walk on the spot, 8 views (configs/synth/demo.yaml), and the second of the walk
