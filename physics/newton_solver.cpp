@@ -96,19 +96,32 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
   // CG on (H + δI) d = −g from d = 0, preconditioned by the (possibly older) Cholesky
   // factor, to a residual of cg_relative_tolerance·‖g‖. On non-positive curvature d keeps
   // the last iterate (every iterate before it is a descent direction).
-  const Eigen::VectorXd b = -g;
-  d.setZero(b.size());
-  Eigen::VectorXd r = b;
+  Eigen::VectorXd r = -g;
+  d.setZero(r.size());
+  const double target = (cg_forcing_ > 0 ? cg_forcing_ : options_.cg_relative_tolerance) * r.norm();
+  const CgOutcome outcome = projected_cg(H, r, d, target, {}, report);
+  if (outcome == CgOutcome::negative_curvature) negative_direction_ = last_cg_direction_;
+  return outcome;
+}
+
+NewtonSolver::CgOutcome NewtonSolver::projected_cg(const SparseHessian& H, Eigen::VectorXd& r, Eigen::VectorXd& d,
+                                                   double target, const std::vector<HeldComponent>& held,
+                                                   NewtonReport& report) {
+  auto project = [&](Eigen::VectorXd& v) {  // onto the moves that keep the held components
+    for (const auto& [i, u] : held) v.segment<3>(3 * i) -= u * u.dot(v.segment<3>(3 * i));
+  };
+  project(r);
   Eigen::VectorXd z = cholmod_->solve(r);
+  project(z);
   Eigen::VectorXd p = z;
   double rz = r.dot(z);
-  const double target = (cg_forcing_ > 0 ? cg_forcing_ : options_.cg_relative_tolerance) * b.norm();
   for (int k = 0; k < options_.cg_max_iterations; ++k) {
     Eigen::VectorXd hp = H.multiply(p);
     hp += delta_ * p;
+    project(hp);
     const double php = p.dot(hp);
     if (!(php > 0)) {
-      negative_direction_ = p;
+      last_cg_direction_ = p;
       return CgOutcome::negative_curvature;
     }
     const double alpha = rz / php;
@@ -117,6 +130,7 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
     ++report.cg_iterations;
     if (r.norm() <= target) return CgOutcome::converged;
     z = cholmod_->solve(r);
+    project(z);
     const double rz_new = r.dot(z);
     p = z + (rz_new / rz) * p;
     rz = rz_new;
@@ -138,42 +152,20 @@ void NewtonSolver::refine_limited_direction(const Eigen::VectorXd& x, const Eige
                                             const Eigen::VectorXd& d, Eigen::VectorXd& limited, NewtonReport& report) {
   // The constraints: vertex i's move along u_i (the unit direction of what the filter took
   // from it) stays what the filter left.
-  std::vector<std::pair<int, Eigen::Vector3d>> held;
+  std::vector<HeldComponent> held;
   for (int i = 0; i < n_; ++i) {
     const Eigen::Vector3d cut = limited.segment<3>(3 * i) - d.segment<3>(3 * i);
     const double length = cut.norm();
     if (length > 0) held.push_back({i, cut / length});
   }
   if (held.empty() || !cholmod_->has_factor()) return;
-  auto project = [&](Eigen::VectorXd& v) {  // onto the moves that keep the held components
-    for (const auto& [i, u] : held) v.segment<3>(3 * i) -= u * u.dot(v.segment<3>(3 * i));
-  };
   // Projected PCG on the model gᵀy + ½yᵀ(H + δI)y from y = limited (H the factorised,
-  // corrected Hessian: positive semi-definite).
+  // corrected Hessian: positive semi-definite), to 1e-2 of the projected residual.
   Eigen::VectorXd y = limited;
   Eigen::VectorXd r = -g - hessian_.multiply(y) - delta_ * y;
-  project(r);
-  const double target = 1e-2 * r.norm();
-  Eigen::VectorXd z = cholmod_->solve(r);
-  project(z);
-  Eigen::VectorXd p = z;
-  double rz = r.dot(z);
-  for (int k = 0; k < options_.cg_max_iterations && r.norm() > target; ++k) {
-    Eigen::VectorXd hp = hessian_.multiply(p);
-    hp += delta_ * p;
-    project(hp);
-    const double php = p.dot(hp);
-    if (!(php > 0)) break;
-    const double step = rz / php;
-    y += step * p;
-    r -= step * hp;
-    ++report.cg_iterations;
-    z = cholmod_->solve(r);
-    project(z);
-    const double rz_new = r.dot(z);
-    p = z + (rz_new / rz) * p;
-    rz = rz_new;
-  }
+  Eigen::VectorXd projected = r;
+  for (const auto& [i, u] : held) projected.segment<3>(3 * i) -= u * u.dot(projected.segment<3>(3 * i));
+  projected_cg(hessian_, r, y, 1e-2 * projected.norm(), held, report);
   // The other vertices' new moves meet the filter too.
   clip_vertex_steps(x, y);
   if (y.allFinite() && g.dot(y) < 0) limited.swap(y);
