@@ -107,6 +107,31 @@ TEST(SimulationLoss, TargetOfAClothInsideTheBodyLiesOutsideIt) {
   }
 }
 
+// The factory builds the cloth's rest state and the body's search tree once and hands out
+// copies: each simulator it makes, the first and one made after it has stepped, steps to
+// the same states, bit for bit, as one built from scratch.
+TEST(SimulationLoss, SimulatorsFromTheFactoryStepAsOneBuiltFromScratch) {
+  REQUIRE_HUMAN();
+  const Character& ch = coarse_skirt();
+  SimulationWindowRecord rec;
+  const auto w = simulation_loss_window(ch, training_simulation(), still_window(ch, skirt_pushed_into_body(ch), 2),
+                                        true, rec);
+  const auto fresh = make_garment_simulator(ch, training_simulation(), 30, ch.body.mesh.V * ch.metres_per_unit,
+                                            garment_pin_targets(ch, ch.cloth->mesh.V));
+  const auto expected = weft::physics::simulate_window(*fresh, w);
+  const weft::physics::SimulatorFactory factory = garment_simulator_factory(ch, training_simulation(), 30);
+  for (int call = 0; call < 2; ++call) {
+    SCOPED_TRACE(call == 0 ? "first simulator" : "second simulator");
+    const auto got = weft::physics::simulate_window(*factory(), w);
+    ASSERT_EQ(got.size(), expected.size());
+    for (size_t f = 0; f < got.size(); ++f) {
+      EXPECT_EQ(got[f].status, expected[f].status);
+      EXPECT_EQ(got[f].newton_iterations, expected[f].newton_iterations);
+      EXPECT_EQ(got[f].x, expected[f].x) << "frame " << f;
+    }
+  }
+}
+
 // The physics claim's quick check (bench/physics_claim.sh, oracle_pose_noise): the oracle
 // pose perturbed as PoseNet errs moves the body into the garment the true pose dressed;
 // the window's target lies outside the perturbed body, so L_sim has penetration to remove.
