@@ -99,17 +99,17 @@ NewtonSolver::CgOutcome NewtonSolver::preconditioned_cg(const SparseHessian& H, 
   Eigen::VectorXd r = -g;
   d.setZero(r.size());
   const double target = (cg_forcing_ > 0 ? cg_forcing_ : options_.cg_relative_tolerance) * r.norm();
-  const CgOutcome outcome = projected_cg(H, r, d, target, {}, report);
-  if (outcome == CgOutcome::negative_curvature) negative_direction_ = last_cg_direction_;
-  return outcome;
+  return projected_cg(H, r, d, target, {}, &negative_direction_, report);
+}
+
+void NewtonSolver::project_onto_held(const std::vector<HeldComponent>& held, Eigen::VectorXd& v) {
+  for (const auto& [i, u] : held) v.segment<3>(3 * i) -= u * u.dot(v.segment<3>(3 * i));
 }
 
 NewtonSolver::CgOutcome NewtonSolver::projected_cg(const SparseHessian& H, Eigen::VectorXd& r, Eigen::VectorXd& d,
                                                    double target, const std::vector<HeldComponent>& held,
-                                                   NewtonReport& report) {
-  auto project = [&](Eigen::VectorXd& v) {  // onto the moves that keep the held components
-    for (const auto& [i, u] : held) v.segment<3>(3 * i) -= u * u.dot(v.segment<3>(3 * i));
-  };
+                                                   Eigen::VectorXd* curvature_direction, NewtonReport& report) {
+  auto project = [&](Eigen::VectorXd& v) { project_onto_held(held, v); };
   project(r);
   Eigen::VectorXd z = cholmod_->solve(r);
   project(z);
@@ -121,7 +121,7 @@ NewtonSolver::CgOutcome NewtonSolver::projected_cg(const SparseHessian& H, Eigen
     project(hp);
     const double php = p.dot(hp);
     if (!(php > 0)) {
-      last_cg_direction_ = p;
+      if (curvature_direction) *curvature_direction = p;
       return CgOutcome::negative_curvature;
     }
     const double alpha = rz / php;
@@ -164,8 +164,8 @@ void NewtonSolver::refine_limited_direction(const Eigen::VectorXd& x, const Eige
   Eigen::VectorXd y = limited;
   Eigen::VectorXd r = -g - hessian_.multiply(y) - delta_ * y;
   Eigen::VectorXd projected = r;
-  for (const auto& [i, u] : held) projected.segment<3>(3 * i) -= u * u.dot(projected.segment<3>(3 * i));
-  projected_cg(hessian_, r, y, 1e-2 * projected.norm(), held, report);
+  project_onto_held(held, projected);
+  projected_cg(hessian_, r, y, 1e-2 * projected.norm(), held, nullptr, report);
   // The other vertices' new moves meet the filter too.
   clip_vertex_steps(x, y);
   if (y.allFinite() && g.dot(y) < 0) limited.swap(y);

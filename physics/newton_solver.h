@@ -163,12 +163,15 @@ class NewtonSolver {
                               NewtonReport& report);
   // A vertex's move component held fixed: vertex index and unit direction.
   using HeldComponent = std::pair<int, Eigen::Vector3d>;
+  // v projected onto the moves that keep the `held` components.
+  static void project_onto_held(const std::vector<HeldComponent>& held, Eigen::VectorXd& v);
   // PCG on (H + δI) from d with residual r (both updated), preconditioned by the current
   // factor, every vector projected onto the moves that keep the `held` components (none:
   // plain PCG), until ‖r‖ ≤ target or cg_max_iterations; on non-positive curvature the
-  // direction met is left in last_cg_direction_.
+  // direction met is written to *curvature_direction (if given).
   CgOutcome projected_cg(const SparseHessian& H, Eigen::VectorXd& r, Eigen::VectorXd& d, double target,
-                         const std::vector<HeldComponent>& held, NewtonReport& report);
+                         const std::vector<HeldComponent>& held, Eigen::VectorXd* curvature_direction,
+                         NewtonReport& report);
   // refine_limited_steps: `limited` (the filter's cut of d) replaced by the minimiser of
   // Newton's model with each cut vertex's move along its cut held; kept as it is when the
   // result is not a descent direction.
@@ -212,7 +215,6 @@ class NewtonSolver {
   bool exact_differs_ = false;      // the corrections changed hessian_ from exact_hessian_
   CgOutcome last_cg_outcome_ = CgOutcome::converged;  // of this iteration's exact_direction
   Eigen::VectorXd negative_direction_;   // CG's direction of non-positive curvature
-  Eigen::VectorXd last_cg_direction_;    // projected_cg's, when it met non-positive curvature
 };
 
 }  // namespace weft::physics
